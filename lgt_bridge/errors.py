@@ -1,0 +1,23 @@
+"""Exceptions raised on purpose by lgt_bridge.
+
+Every error derives from :class:`LGTError` and its message says what was wrong,
+where (argument, body index, time) and what to do about it.
+"""
+
+
+class LGTError(Exception):
+    """Base class of every error lgt_bridge raises on purpose."""
+
+
+class InputError(LGTError, ValueError):
+    """Bad input rejected before any computation: wrong shape, NaN/inf, a
+    non-unit quaternion, an unknown option, an inconsistent time span."""
+
+
+class ChartDomainError(LGTError, ValueError):
+    """A local chart is evaluated outside its domain (e.g. the Cayley chart at a
+    half-turn, where the Gibbs vector does not exist)."""
+
+
+class StepError(LGTError, RuntimeError):
+    """An integration step failed (non-finite state, Newton divergence)."""

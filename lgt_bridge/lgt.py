@@ -1,0 +1,144 @@
+"""Local-global transition maps τ and the local kinematics.
+
+    τ(q_k, X) = α⁻¹(α(q_k) · ψ(X))
+
+with α an absolute parameterization (params.py), ψ the exp or Cayley chart of
+the group G = SE(3) or SO(3)xR³ and · the group law of G (ERRATA: the rule that
+settles every case). τ is composed, not written per pairing: the rotation is a
+quaternion product p = p_k ⊗ ψ_rot(x) (paper eq. Qprime in product form), the
+translation follows the group law:
+
+    SO(3)xR³:  r = r_k + y                         (increment in the inertial frame)
+    SE(3):     r = r_k + R_k T(x) y,  T = dexp_x (exp) or I + cay(c) (Cayley)
+
+Velocities: the model gives V = (ω body, ṙ inertial), which is the twist of
+SO(3)xR³. On SE(3) the integrator uses the body twist (ω, Rᵀṙ); see
+:func:`to_group_twist`. Local kinematics: Ẋ = dψ⁻¹_{-X}(V) (paper eq. dpsiinv).
+"""
+import numpy as np
+
+from . import _checks, params
+from .errors import InputError
+from .groups import quaternion as _q
+from .groups import se3 as _se3
+from .groups import so3 as _so3
+from .groups import so3xr3 as _so3xr3
+
+GROUPS = ("SE3", "SO3xR3")
+CHARTS = ("exp", "cay")
+
+_GROUP_MODULE = {"SE3": _se3, "SO3xR3": _so3xr3}
+_DPSI_INV = {(g, c): getattr(m, f"_d{c}_inv_apply") for g, m in _GROUP_MODULE.items() for c in CHARTS}
+_DPSI = {(g, c): getattr(m, f"_d{c}_apply") for g, m in _GROUP_MODULE.items() for c in CHARTS}
+
+
+def check_group(group):
+    if group not in GROUPS:
+        raise InputError(f"unknown group {group!r}; use one of {list(GROUPS)}.")
+    return group
+
+
+def check_chart(chart):
+    if chart not in CHARTS:
+        raise InputError(f"unknown chart {chart!r}; use one of {list(CHARTS)}.")
+    return chart
+
+
+def _chart_quat(chart, x):
+    """Rotation part of ψ(X) as a unit quaternion (scalar first)."""
+    return _q._from_rotvec(x) if chart == "exp" else _q._from_gibbs(x)
+
+
+class LGT:
+    """τ and the local kinematics for one (parameterization, group, chart).
+
+    The methods work on validated (N, ν) / (N, 6) batches; use :func:`tau` and
+    :func:`local_rates` for checked single-body or batched calls.
+    """
+
+    def __init__(self, param, group="SE3", chart="exp"):
+        self.param = params.get(param)
+        self.group = check_group(group)
+        self.chart = check_chart(chart)
+        self._dpsi_inv = _DPSI_INV[(self.group, self.chart)]
+        self._dpsi = _DPSI[(self.group, self.chart)]
+
+    def __repr__(self):
+        return f"LGT({self.param.name!r}, {self.group!r}, {self.chart!r})"
+
+    def tau(self, q, X):
+        r, rot = q[:, :3], q[:, 3:]
+        x, y = X[:, :3], X[:, 3:]
+        pk = self.param._to_quat(rot)
+        dp = _chart_quat(self.chart, x)
+        if self.group == "SO3xR3":
+            r1 = r + y
+        else:
+            t = _so3._dexp_apply(x, y) if self.chart == "exp" else y + _q._rotate(dp, y)
+            r1 = r + _q._rotate(pk, t)
+        return np.concatenate([r1, self.param._from_quat(_q._mul(pk, dp), rot)], axis=1)
+
+    def rates(self, X, V):
+        """Ẋ = dψ⁻¹_{-X}(V), V in the group's velocity representation."""
+        return self._dpsi_inv(-X, V)
+
+    def twist(self, X, Xdot):
+        """V = dψ_{-X}(Ẋ) (paper eq. dpsi), the inverse of :meth:`rates`."""
+        return self._dpsi(-X, Xdot)
+
+
+def _prepare(q, X, param, group, chart):
+    lgt = LGT(param, group, chart)
+    qb, sq = lgt.param.validate(q, "q")
+    Xb, sx = _checks.batch(X, (6,), "X")
+    if len(qb) != len(Xb) and 1 not in (len(qb), len(Xb)):
+        raise InputError(f"q has {len(qb)} bodies but X has {len(Xb)}; pass one X per body.")
+    n = max(len(qb), len(Xb))
+    return lgt, np.broadcast_to(qb, (n, qb.shape[1])), np.broadcast_to(Xb, (n, 6)), sq and sx
+
+
+def tau(q, X, param="quat", group="SE3", chart="exp"):
+    """Absolute coordinates after the local increment X: τ(q, X) = α⁻¹(α(q) ψ(X)).
+
+    q: (ν,) or (N, ν) position-first absolute coordinates of ``param``;
+    X: (6,) or (N, 6) local coordinates (rotation part first).
+    """
+    lgt, qb, Xb, single = _prepare(q, X, param, group, chart)
+    return _checks.unbatch(lgt.tau(qb, Xb), single)
+
+
+def local_rates(X, V, group="SE3", chart="exp"):
+    """Ẋ = dψ⁻¹_{-X}(V) with V in the group's twist: (ω, Rᵀṙ) on SE(3), (ω, ṙ) on SO(3)xR³."""
+    lgt = LGT("quat", group, chart)
+    Xb, sx = _checks.batch(X, (6,), "X")
+    Vb, sv = _checks.batch(V, (6,), "V")
+    if len(Xb) != len(Vb):
+        raise InputError(f"X has {len(Xb)} bodies but V has {len(Vb)}; pass one twist per body.")
+    return _checks.unbatch(lgt.rates(Xb, Vb), sx and sv)
+
+
+def _rotate_linear(q, V, param, inverse):
+    p = params.get(param)._to_quat(q[:, 3:])
+    if inverse:
+        p = _q._conj(p)
+    return np.concatenate([V[:, :3], _q._rotate(p, V[:, 3:])], axis=1)
+
+
+def to_group_twist(q, V, param="quat", group="SE3"):
+    """Model twist (ω, ṙ) -> the group's twist: (ω, Rᵀṙ) on SE(3), unchanged on SO(3)xR³."""
+    par = params.get(param)
+    qb, sq = par.validate(q, "q")
+    Vb, _ = _checks.batch(V, (6,), "V")
+    if check_group(group) == "SO3xR3":
+        return _checks.unbatch(Vb.copy(), sq)
+    return _checks.unbatch(_rotate_linear(qb, Vb, par, inverse=True), sq)
+
+
+def from_group_twist(q, V, param="quat", group="SE3"):
+    """The group's twist -> model twist (ω, ṙ): ṙ = R u on SE(3)."""
+    par = params.get(param)
+    qb, sq = par.validate(q, "q")
+    Vb, _ = _checks.batch(V, (6,), "V")
+    if check_group(group) == "SO3xR3":
+        return _checks.unbatch(Vb.copy(), sq)
+    return _checks.unbatch(_rotate_linear(qb, Vb, par, inverse=False), sq)
