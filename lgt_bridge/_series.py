@@ -3,10 +3,12 @@
 The closed forms of exp/dexp/dexp_inv on SO(3) and SE(3) divide small
 differences by powers of phi. Below ``SERIES_MAX`` the functions are evaluated
 from their Taylor series in phi**2 instead, truncated adaptively to the
-largest angle in the batch (each kept term above 1e-18 relative); the series
+largest angle in the batch (the first omitted term below 2e-17 relative); the series
 are accurate to double precision there and the closed forms lose at most a few
-ulps above it. tests/test_series.py checks every function against mpmath.
+ulps above it. In an integration step phi is small and only a handful of terms
+are evaluated. tests/test_series.py checks every function against mpmath.
 
+    sinc(phi) = sin(phi) / phi,               beta(phi) = sinc(phi/2)**2
     c3(phi) = (1 - sinc phi) / phi**2          = (phi - sin phi) / phi**3
     d(phi)  = (1 - gamma) / phi**2,            gamma = (phi/2) cot(phi/2)
     e(phi)  = (1/beta + gamma - 2) / phi**4,   beta  = sinc(phi/2)**2
@@ -20,6 +22,9 @@ SERIES_MAX = 2.0
 # Taylor coefficients in phi**2 (k = 0, 1, ...).
 # c3: (-1)^k / (2k+3)!
 _C3 = np.array([(-1) ** k / factorial(2 * k + 3) for k in range(14)])
+# sinc: (-1)^k / (2k+1)!;  beta = sinc(phi/2)^2 = 2 (1 - cos phi)/phi^2: 2 (-1)^k / (2k+2)!
+_SINC = np.array([(-1) ** k / factorial(2 * k + 1) for k in range(14)])
+_BETA = np.array([2.0 * (-1) ** k / factorial(2 * k + 2) for k in range(14)])
 # d: |B_{2k+2}| / (2k+2)!  (Bernoulli numbers; from (x/2) cot(x/2) = 1 - sum |B_2n| x^2n/(2n)!)
 _D = np.array([
     0.08333333333333333, 0.001388888888888889, 3.306878306878307e-05, 8.267195767195768e-07,
@@ -36,58 +41,80 @@ _E = np.array([
     1.2532382798262054e-27, 3.3612243325542163e-29, 8.987085179662393e-31, 2.3962687049928537e-32])
 
 
-def _nterms(coef, phi2max):
-    """Number of leading terms whose contribution exceeds 1e-18 relative."""
-    if phi2max <= 0.0:
-        return 1
-    k = np.abs(coef) * phi2max ** np.arange(len(coef))
-    keep = np.flatnonzero(k > 1e-18 * abs(coef[0]))
-    return int(keep[-1]) + 2 if len(keep) else 1
+def _limits(coef):
+    """lim[K-1]: largest phi**2 at which K terms suffice (first omitted term <= 2e-17 c0)."""
+    lim = [abs(2e-17 * coef[0] / coef[K]) ** (1.0 / K) for K in range(1, len(coef))]
+    return np.maximum.accumulate(lim).tolist() + [np.inf]
 
 
-def _horner(coef, phi2):
-    n = min(_nterms(coef, float(phi2.max())), len(coef))
-    out = np.full_like(phi2, coef[n - 1])
-    for c in coef[n - 2::-1]:
-        out *= phi2
-        out += c
+def _horner(coef, lim, phi2):
+    p2max = float(phi2.max())
+    n = 1
+    while p2max > lim[n - 1]:
+        n += 1
+    out = coef[n - 1] * phi2 + coef[n - 2] if n > 1 else coef[0] + 0.0 * phi2
+    for c in coef[n - 3::-1] if n > 2 else ():
+        out = out * phi2 + c
     return out
 
 
-def _blend(phi, series, closed):
+def _scalar(x, coef, lim, closed):
+    """One body: the same evaluation on a Python float (numpy's per-call overhead
+    would dominate a single element)."""
+    if x >= SERIES_MAX:
+        return closed(np.array([x]))
+    p2 = x * x
+    n = 1
+    while p2 > lim[n - 1]:
+        n += 1
+    out = 0.0
+    for c in coef[n - 1::-1]:
+        out = out * p2 + c
+    return np.array([out])
+
+
+def _blend(phi, coef, lim, closed):
     """Series below SERIES_MAX, closed form above; each only where needed."""
+    if phi.shape == (1,):
+        return _scalar(float(phi[0]), coef, lim, closed)
+    pmax = float(phi.max()) if phi.size else 0.0
+    if pmax < SERIES_MAX:
+        return _horner(coef, lim, phi * phi)
     small = phi < SERIES_MAX
-    if small.all():
-        return series(phi * phi)
     if not small.any():
         return closed(phi)
     out = np.empty_like(phi)
-    out[small] = series(phi[small] ** 2)
+    out[small] = _horner(coef, lim, phi[small] ** 2)
     out[~small] = closed(phi[~small])
     return out
 
 
+_L_C3, _L_D, _L_E, _L_SINC, _L_BETA = map(_limits, (_C3, _D, _E, _SINC, _BETA))
+_C3, _D, _E, _SINC, _BETA = (c.tolist() for c in (_C3, _D, _E, _SINC, _BETA))
+
+
 def sinc(phi):
-    """sin(phi)/phi (no cancellation; exact limit 1 at 0)."""
-    return np.sinc(phi / np.pi)
+    """sin(phi)/phi."""
+    return _blend(phi, _SINC, _L_SINC, lambda p: np.sin(p) / p)
 
 
 def beta(phi):
     """sinc(phi/2)**2, so that (1 - cos phi)/phi**2 = beta/2."""
-    s = np.sinc(phi / (2.0 * np.pi))
-    return s * s
+    def closed(p):
+        s = np.sin(0.5 * p) / (0.5 * p)
+        return s * s
+    return _blend(phi, _BETA, _L_BETA, closed)
 
 
 def c3(phi):
-    return _blend(phi, lambda p2: _horner(_C3, p2),
-                  lambda p: (p - np.sin(p)) / p ** 3)
+    return _blend(phi, _C3, _L_C3, lambda p: (p - np.sin(p)) / p ** 3)
 
 
 def d(phi):
     def closed(p):
         h = 0.5 * p
         return (1.0 - h * np.cos(h) / np.sin(h)) / (p * p)
-    return _blend(phi, lambda p2: _horner(_D, p2), closed)
+    return _blend(phi, _D, _L_D, closed)
 
 
 def e(phi):
@@ -95,4 +122,4 @@ def e(phi):
         h = 0.5 * p
         s, c = np.sin(h), np.cos(h)
         return ((h / s) ** 2 + h * c / s - 2.0) / p ** 4
-    return _blend(phi, lambda p2: _horner(_E, p2), closed)
+    return _blend(phi, _E, _L_E, closed)

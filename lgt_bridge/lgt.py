@@ -66,10 +66,17 @@ class LGT:
     def __repr__(self):
         return f"LGT({self.param.name!r}, {self.group!r}, {self.chart!r})"
 
+    def base(self, q):
+        """What τ(q_k, ·) needs of q_k, computed once per step: (r_k, θ_k, p_k)."""
+        return q[:, :3], q[:, 3:], self.param._to_quat(q[:, 3:])
+
     def tau(self, q, X):
-        r, rot = q[:, :3], q[:, 3:]
+        return self.tau_at(self.base(q), X)
+
+    def tau_at(self, base, X):
+        """τ(q_k, X) for a prepared ``base(q_k)`` (the stages of one step share it)."""
+        r, rot, pk = base
         x, y = X[:, :3], X[:, 3:]
-        pk = self.param._to_quat(rot)
         dp = _chart_quat(self.chart, x)
         if self.group == "SO3xR3":
             r1 = r + y

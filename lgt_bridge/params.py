@@ -202,29 +202,39 @@ class TaitBryanXYZ(Parameterization):
     GIMBAL_TOL = 1e-9
 
     def _to_quat(self, rot):
+        # p = px(θ0) ⊗ py(θ1) ⊗ pz(θ2), multiplied out (tests: scipy 'XYZ', Exudyn RotXYZ)
         h = 0.5 * rot
         c, s = np.cos(h), np.sin(h)
-        z = np.zeros(len(rot))
-        px = np.stack([c[:, 0], s[:, 0], z, z], axis=1)
-        py = np.stack([c[:, 1], z, s[:, 1], z], axis=1)
-        pz = np.stack([c[:, 2], z, z, s[:, 2]], axis=1)
-        return _q._mul(_q._mul(px, py), pz)
+        ca, cb, cc, sa, sb, sc = c[:, 0], c[:, 1], c[:, 2], s[:, 0], s[:, 1], s[:, 2]
+        cacb, sasb, sacb, casb = ca * cb, sa * sb, sa * cb, ca * sb
+        return np.stack([cacb * cc - sasb * sc, sacb * cc + casb * sc,
+                         casb * cc - sacb * sc, cacb * sc + sasb * cc], axis=1)
 
     def _from_quat(self, p, prev):
-        R = _q._to_matrix(p)
-        sb = np.clip(R[:, 0, 2], -1.0, 1.0)
-        cb = 0.5 * (np.hypot(R[:, 0, 0], R[:, 0, 1]) + np.hypot(R[:, 1, 2], R[:, 2, 2]))
-        b1 = np.arctan2(sb, cb)
-        a1 = np.arctan2(-R[:, 1, 2], R[:, 2, 2])
-        c1 = np.arctan2(-R[:, 0, 1], R[:, 0, 0])
-        cand = np.stack([np.stack([a1, b1, c1], axis=1),
-                         np.stack([a1 + np.pi, np.pi - b1, c1 + np.pi], axis=1)])   # (2, N, 3)
-        cand = cand + _TWO_PI * np.round((prev[None] - cand) / _TWO_PI)
-        dist = ((cand - prev[None]) ** 2).sum(axis=2)
-        out = np.where((dist[0] <= dist[1])[:, None], cand[0], cand[1])
+        p0, p1, p2, p3 = p[:, 0], p[:, 1], p[:, 2], p[:, 3]
+        R00 = 1.0 - 2.0 * (p2 * p2 + p3 * p3)
+        R01 = 2.0 * (p1 * p2 - p0 * p3)
+        R02 = 2.0 * (p1 * p3 + p0 * p2)
+        R12 = 2.0 * (p2 * p3 - p0 * p1)
+        R22 = 1.0 - 2.0 * (p1 * p1 + p2 * p2)
+        cb = np.hypot(R00, R01)                       # |cos θ1|, accurate near the lock
+        a1 = np.arctan2(-R12, R22)
+        b1 = np.arctan2(np.clip(R02, -1.0, 1.0), cb)
+        c1 = np.arctan2(-R01, R00)
+        # branch one (a, b, c), shifted by 2πk towards prev; where it lands far from
+        # prev (passing the lock) try branch two (a + π, π - b, c + π) as well
+        out = np.stack([a1, b1, c1], axis=1)
+        out += _TWO_PI * np.round((prev - out) * (1.0 / _TWO_PI))
+        far = ((out - prev) ** 2).sum(axis=1) > 0.25
+        if far.any():
+            pf, of = prev[far], out[far]
+            two = np.stack([a1[far] + np.pi, np.pi - b1[far], c1[far] + np.pi], axis=1)
+            two += _TWO_PI * np.round((pf - two) * (1.0 / _TWO_PI))
+            nearer = ((two - pf) ** 2).sum(axis=1) < ((of - pf) ** 2).sum(axis=1)
+            out[far] = np.where(nearer[:, None], two, of)
         lock = cb < self.GIMBAL_TOL
         if lock.any():
-            out[lock] = self._at_lock(R[lock], out[lock], prev[lock])
+            out[lock] = self._at_lock(_q._to_matrix(p[lock]), out[lock], prev[lock])
         return out
 
     @staticmethod

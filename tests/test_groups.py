@@ -247,3 +247,10 @@ def test_batched_equals_per_body(rng):
         for name in ("dexp_inv_apply", "dcay_inv_apply"):
             f = getattr(mod, name)
             assert np.allclose(f(X, V), np.stack([f(x, v) for x, v in zip(X, V)]), rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("n", [1, 5, 33, 1000])
+def test_cross_product_in_both_regimes(n, rng):
+    from lgt_bridge.groups._vec import cross
+    a, b = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    assert np.abs(cross(a, b) - np.cross(a, b)).max() < 1e-15

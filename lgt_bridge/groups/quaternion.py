@@ -4,6 +4,7 @@ R = I + 2 (p0 p~ + p~^2) (eq. QuatR), exp/log <-> rotation vector, Gibbs vector.
 """
 import numpy as np
 
+from .. import _series
 from .._checks import public
 from ..errors import ChartDomainError
 from ._vec import EYE3, cross, dot, hat, norm
@@ -64,9 +65,8 @@ def _from_matrix(R):
 
 def _from_rotvec(x):
     """exp(0, x/2) = (cos(φ/2), ½ sinc(φ/2) x) (paper eq. Sp1exp)."""
-    phi = norm(x)
-    h = 0.5 * phi
-    return np.concatenate([np.cos(h)[:, None], (0.5 * np.sinc(h / np.pi))[:, None] * x], axis=1)
+    h = 0.5 * norm(x)
+    return np.concatenate([np.cos(h)[:, None], (0.5 * _series.sinc(h))[:, None] * x], axis=1)
 
 
 def _to_rotvec(p):

@@ -102,10 +102,17 @@ def _dexp_apply(X, V):
 
 
 def _dexp_inv_apply(X, V):
+    """[dexp_x⁻¹ w; B(y) w + dexp_x⁻¹ u], coefficients computed once."""
     x, y = X[:, :3], X[:, 3:]
     w, u = V[:, :3], V[:, 3:]
-    return np.concatenate([so3._dexp_inv_apply(x, w),
-                           _B_apply(x, y, w) + so3._dexp_inv_apply(x, u)], axis=1)
+    phi = norm(x)
+    dd, ee = _series.d(phi)[:, None], _series.e(phi)[:, None]
+    xw, xu, yw = cross(x, w), cross(x, u), cross(y, w)
+    xxw = cross(x, xw)
+    top = w - 0.5 * xw + dd * xxw
+    bot = (u - 0.5 * (xu + yw) + dd * (cross(x, xu) + cross(x, yw) + cross(y, xw))
+           + (ee * dot(x, y)[:, None]) * xxw)
+    return np.concatenate([top, bot], axis=1)
 
 
 def _dcay_apply(X, V):
