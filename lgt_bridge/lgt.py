@@ -75,6 +75,10 @@ class LGT:
 
     def tau_at(self, base, X):
         """τ(q_k, X) for a prepared ``base(q_k)`` (the stages of one step share it)."""
+        return self.tau_pose(base, X)[0]
+
+    def tau_pose(self, base, X):
+        """(τ(q_k, X), p): the coordinates and the unit quaternion (scalar first) of the pose."""
         r, rot, pk = base
         x, y = X[:, :3], X[:, 3:]
         dp = _chart_quat(self.chart, x)
@@ -83,7 +87,8 @@ class LGT:
         else:
             t = _so3._dexp_apply(x, y) if self.chart == "exp" else y + _q._rotate(dp, y)
             r1 = r + _q._rotate(pk, t)
-        return np.concatenate([r1, self.param._from_quat(_q._mul(pk, dp), rot)], axis=1)
+        p = _q._mul(pk, dp)
+        return np.concatenate([r1, self.param._from_quat(p, rot)], axis=1), p
 
     def rates(self, X, V):
         """Ẋ = dψ⁻¹_{-X}(V), V in the group's velocity representation."""

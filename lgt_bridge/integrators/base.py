@@ -1,0 +1,50 @@
+"""What every stepper shares: the local problem, the state, failure reporting."""
+import numpy as np
+
+from ..errors import StepError
+
+
+class StepFailed(Exception):
+    """Internal: a step could not be completed; the driver turns it into a result."""
+
+    def __init__(self, message, error=StepError):
+        super().__init__(message)
+        self.error = error
+
+
+def first_nonfinite(layout, kind, arr):
+    i = int(np.flatnonzero(~np.isfinite(arr))[0])
+    return layout.owner(kind, i)
+
+
+class Stepper:
+    """Holds (q, W) between steps; ``attempt(t, h)`` advances or declines."""
+
+    adaptive = False
+
+    def __init__(self, problem, projector=None):
+        self.prob = problem
+        self.projector = projector
+        self.n_rejected = 0
+        self.n_newton = 0
+
+    def set_state(self, q, V):
+        """Start (or restart) from model coordinates (q, V)."""
+        self.q = np.array(q, float)
+        self.prob.start(self.q)
+        self.W = self.prob.group_velocity(np.array(V, float), [b[2] for b in self.prob.bases])
+        self.V = np.array(V, float)
+
+    def check_finite(self, t, q, V):
+        for kind, arr in (("q", q), ("V", V)):
+            if not np.isfinite(arr).all():
+                raise StepFailed(f"non-finite {kind} at t = {t:.9g} in "
+                                 f"{first_nonfinite(self.prob.layout, kind, arr)}; the model "
+                                 "returned NaN/inf or the step diverged (try a smaller dt).")
+
+    def finish(self, t1, q1, V1):
+        """Accept (q1, V1) at t1, after projection onto the constraints if the model has them."""
+        self.check_finite(t1, q1, V1)
+        if self.projector is not None:
+            q1, V1 = self.projector(q1, V1)
+        self.set_state(q1, V1)

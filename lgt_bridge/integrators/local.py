@@ -1,0 +1,136 @@
+"""The local problem of one step: the model seen through τ from X = 0.
+
+For a step from (q_k, W_k) the state is (X, W): X the local coordinates of every
+rigid body (6 each, in its group's chart) followed by the increments of the
+vector-space coordinates; W the velocities in the integrator's representation:
+per rigid body (ω, Rᵀṙ) on SE(3), (ω, ṙ) on SO(3)xR³; vector rates unchanged.
+
+    q(X)  = τ(q_k, X)                                   per body, batched per (α, G, ψ)
+    Ẋ     = dψ⁻¹_{-X}(W)  (bodies),   v (vector coordinates)
+    Ẇ     = f(q, V, t)  with  V = (ω, R u) on SE(3)  and  d/dt(Rᵀṙ) = Rᵀr̈ - ω × Rᵀṙ
+"""
+import numpy as np
+
+from .. import lgt as _lgt
+from ..errors import InputError
+from ..groups import quaternion as _q
+from ..groups._vec import cross
+
+
+class BodySet:
+    """Bodies that share (parameterization, group, chart): one batched τ call."""
+
+    def __init__(self, param, group, chart, body_ids, layout):
+        self.lgt = _lgt.LGT(param, group, chart)
+        self.se3 = group == "SE3"
+        self.cay = chart == "cay"
+        bodies = [layout.bodies[i] for i in body_ids]
+        self.ids = np.array(body_ids)
+        self.qidx = np.array([[*b.pos, *b.rot] for b in bodies])
+        self.vidx = np.array([b.twist for b in bodies])
+        self.wang, self.wlin = self.vidx[:, :3], self.vidx[:, 3:]
+        self.xidx = 6 * self.ids[:, None] + np.arange(6)
+
+
+def per_body(option, n, name, check):
+    """A group/chart option given once or per body -> list of n values."""
+    if isinstance(option, str):
+        return [check(option)] * n
+    vals = list(option)
+    if len(vals) != n:
+        raise InputError(f"{name}: got {len(vals)} values for {n} rigid bodies; give one value "
+                         "or one per body.")
+    return [check(v) for v in vals]
+
+
+class LocalProblem:
+    """Evaluates the local ODE of a model for the step that starts at q_k."""
+
+    def __init__(self, model, group="SE3", chart="exp"):
+        self.model = model
+        lay = self.layout = model.layout
+        nb = lay.nbodies
+        self.groups = per_body(group, nb, "group", _lgt.check_group)
+        self.charts = per_body(chart, nb, "chart", _lgt.check_chart)
+        keys = {}
+        for i, b in enumerate(lay.bodies):
+            keys.setdefault((b.param.name, self.groups[i], self.charts[i]), []).append(i)
+        self.sets = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay) for (_, g, c), ids in keys.items()]
+        self.vq = np.array(lay.vector_q, int)
+        self.vv = np.array(lay.vector_v, int)
+        self.nX = 6 * nb + len(self.vq)
+        self.vx = 6 * nb + np.arange(len(self.vq))
+        self.nv = lay.nv
+        self.n_f = 0
+        self.cay_rows = np.concatenate([s.xidx[:, :3] for s in self.sets if s.cay] or [np.zeros((0, 3), int)])
+
+    # --- per step ---------------------------------------------------------------
+    def start(self, q_k):
+        self.q_k = q_k
+        self.bases = [s.lgt.base(q_k[s.qidx]) for s in self.sets]
+
+    def configuration(self, X):
+        """q = τ(q_k, X) and the quaternion of every body set."""
+        q = self.q_k.copy()
+        quats = []
+        for s, base in zip(self.sets, self.bases):
+            rows, p = s.lgt.tau_pose(base, X[s.xidx])
+            q[s.qidx] = rows
+            quats.append(p)
+        if len(self.vq):
+            q[self.vq] = self.q_k[self.vq] + X[self.vx]
+        return q, quats
+
+    def model_velocity(self, W, quats):
+        """V = W with the linear velocity of SE(3) bodies rotated to the inertial frame."""
+        V = W.copy()
+        for s, p in zip(self.sets, quats):
+            if s.se3:
+                V[s.wlin] = _q._rotate(p, W[s.wlin])
+        return V
+
+    def group_velocity(self, V, quats):
+        W = V.copy()
+        for s, p in zip(self.sets, quats):
+            if s.se3:
+                W[s.wlin] = _q._rotate(_q._conj(p), V[s.wlin])
+        return W
+
+    def group_acceleration(self, Vdot, W, quats):
+        """Ẇ from V̇: on SE(3) d/dt(Rᵀṙ) = Rᵀr̈ - ω × Rᵀṙ."""
+        Wd = Vdot.copy()
+        for s, p in zip(self.sets, quats):
+            if s.se3:
+                Wd[s.wlin] = _q._rotate(_q._conj(p), Vdot[s.wlin]) - cross(W[s.wang], W[s.wlin])
+        return Wd
+
+    def model_acceleration(self, Wdot, W, quats):
+        """V̇ from Ẇ (the inverse of group_acceleration)."""
+        Vd = Wdot.copy()
+        for s, p in zip(self.sets, quats):
+            if s.se3:
+                Vd[s.wlin] = _q._rotate(p, Wdot[s.wlin] + cross(W[s.wang], W[s.wlin]))
+        return Vd
+
+    def kinematics(self, X, W):
+        """Ẋ = dψ⁻¹_{-X}(W) per body; v for vector coordinates."""
+        Xd = np.empty(self.nX)
+        for s in self.sets:
+            Xd[s.xidx] = s.lgt.rates(X[s.xidx], W[s.vidx])
+        if len(self.vq):
+            Xd[self.vx] = W[self.vv]
+        return Xd
+
+    def rhs(self, X, W, t):
+        """(Ẋ, Ẇ) of the local ODE, and the q, V it was evaluated at."""
+        q, quats = self.configuration(X)
+        V = self.model_velocity(W, quats)
+        Vd = self.model.f(q, V, t)
+        self.n_f += 1
+        return self.kinematics(X, W), self.group_acceleration(Vd, W, quats), q, V
+
+    def max_cayley(self, X):
+        """Largest |c| among Cayley-chart bodies (a half-turn is |c| -> ∞)."""
+        if not len(self.cay_rows):
+            return 0.0
+        return float(np.sqrt((X[self.cay_rows] ** 2).sum(axis=1)).max())

@@ -1,0 +1,147 @@
+"""Runge-Kutta-Munthe-Kaas: an explicit tableau on the local ODE (X, W) from X = 0,
+q_{k+1} = τ(q_k, X_{k+1}). Fixed step (euler, rkmk2, rkmk4) and Dormand-Prince
+5(4) with an embedded error estimate on (X, W) and a PI step-size controller."""
+import numpy as np
+
+from ..errors import ChartDomainError
+from .base import StepFailed, Stepper
+
+#: a stage whose Cayley coordinates exceed this (|c| = tan(φ/2): φ = 90°) is refused
+CAYLEY_LIMIT = 1.0
+
+
+class ExplicitRK(Stepper):
+
+    def __init__(self, problem, tableau, projector=None):
+        super().__init__(problem, projector)
+        self.tab = tableau
+        self.KX = np.zeros((tableau.stages, problem.nX))
+        self.KW = np.zeros((tableau.stages, problem.nv))
+        self._k1 = None                        # FSAL: the first stage of the next step
+
+    def set_state(self, q, V):
+        super().set_state(q, V)
+        self._k1 = None
+
+    def stages(self, t, h):
+        """All stages of one step; returns (X1, W1)."""
+        prob, tab, KX, KW = self.prob, self.tab, self.KX, self.KW
+        A, c = tab.A, tab.c
+        X0 = np.zeros(prob.nX)
+        for i in range(tab.stages):
+            if i == 0:
+                X, W = X0, self.W
+                if self._k1 is not None:
+                    KX[0], KW[0] = self._k1
+                    continue
+            else:
+                X = h * (A[i, :i] @ KX[:i])
+                W = self.W + h * (A[i, :i] @ KW[:i])
+                if prob.max_cayley(X) > CAYLEY_LIMIT:
+                    raise _CayleyLimit(prob.max_cayley(X))
+            KX[i], KW[i], q, V = prob.rhs(X, W, t + c[i] * h)
+            if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
+                self.check_finite(t + c[i] * h, q, V)
+                raise StepFailed(f"non-finite acceleration at t = {t + c[i] * h:.9g}: the model "
+                                 "returned NaN/inf for a finite state.")
+        X1 = h * (tab.b @ KX)
+        W1 = self.W + h * (tab.b @ KW)
+        return X1, W1
+
+    def end_state(self, X1, W1):
+        q1, quats = self.prob.configuration(X1)
+        return q1, self.prob.model_velocity(W1, quats)
+
+
+class _CayleyLimit(Exception):
+    def __init__(self, c):
+        self.c = c
+
+
+class FixedRK(ExplicitRK):
+
+    def attempt(self, t, h):
+        try:
+            X1, W1 = self.stages(t, h)
+        except _CayleyLimit as lim:
+            raise StepFailed(
+                f"Cayley chart at t = {t:.9g}: a stage of the step h = {h:.3g} rotates a body by "
+                f"{2 * np.degrees(np.arctan(lim.c)):.0f}° (|c| = {lim.c:.3g} > {CAYLEY_LIMIT}); "
+                "the chart degenerates towards a half-turn. Reduce dt, or use chart='exp' or an "
+                "adaptive method.", ChartDomainError) from None
+        if not (np.isfinite(X1).all() and np.isfinite(W1).all()):
+            raise StepFailed(f"non-finite state at t = {t + h:.9g}; reduce dt.")
+        self.finish(t + h, *self.end_state(X1, W1))
+        return True, h
+
+
+class AdaptiveRK(ExplicitRK):
+    """Embedded pair with PI control (Hairer-Wanner's DOPRI5 constants)."""
+
+    adaptive = True
+    SAFETY, FACMIN, FACMAX = 0.9, 0.2, 10.0
+    ALPHA, BETA = 0.17, 0.04
+
+    def __init__(self, problem, tableau, rtol, atol, projector=None, first_step=None):
+        super().__init__(problem, tableau, projector)
+        self.rtol, self.atol = rtol, atol
+        self.h_next = first_step
+        self._err_prev = 1e-4
+        self._facmax = self.FACMAX
+        self.db = tableau.b - tableau.b_err
+
+    def _norm(self, y, scale):
+        return float(np.sqrt(np.mean((y / scale) ** 2)))
+
+    def initial_step(self, t):
+        """Hairer-Nørsett-Wanner's starting step (II.4), on y = (X, W) with X = 0."""
+        prob = self.prob
+        KX, KW, _, _ = prob.rhs(np.zeros(prob.nX), self.W, t)
+        y0 = np.concatenate([np.zeros(prob.nX), self.W])
+        f0 = np.concatenate([KX, KW])
+        sc = self.atol + self.rtol * np.abs(y0)
+        d0, d1 = self._norm(y0, sc), self._norm(f0, sc)
+        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+        KX1, KW1, _, _ = prob.rhs(h0 * KX, self.W + h0 * KW, t + h0)
+        d2 = self._norm(np.concatenate([KX1, KW1]) - f0, sc) / h0
+        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 5)
+        return min(100 * h0, h1)
+
+    def attempt(self, t, h):
+        prob, tab = self.prob, self.tab
+        try:
+            X1, W1 = self.stages(t, h)
+        except _CayleyLimit:
+            self.n_rejected += 1
+            self._facmax = 1.0
+            return False, 0.25 * h
+        err = h * np.concatenate([self.db @ self.KX, self.db @ self.KW])
+        y1 = np.concatenate([X1, W1])
+        scale = self.atol + self.rtol * np.maximum(np.abs(np.concatenate([np.zeros(prob.nX), self.W])), np.abs(y1))
+        en = self._norm(err, scale)
+        if not np.isfinite(en):
+            self.n_rejected += 1
+            return False, 0.25 * h
+        if en <= 1.0:
+            fac = self.SAFETY * en ** -self.ALPHA * self._err_prev ** self.BETA if en > 0 else self._facmax
+            fac = min(self._facmax, max(self.FACMIN, fac))
+            self._err_prev = max(en, 1e-4)
+            self._facmax = self.FACMAX
+            k_last = (self.KX[-1].copy(), self.KW[-1].copy())
+            self.finish(t + h, *self.end_state(X1, W1))
+            if tab.fsal and self.projector is None:
+                self._k1 = (W1_to_K0(prob, self.W), k_last[1])
+            return True, h * fac
+        self.n_rejected += 1
+        self._facmax = 1.0
+        return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.order))
+
+
+def W1_to_K0(prob, W):
+    """First stage of the next step: Ẋ at X = 0 is W itself (dψ⁻¹_0 = I)."""
+    K = np.zeros(prob.nX)
+    for s in prob.sets:
+        K[s.xidx] = W[s.vidx]
+    if len(prob.vq):
+        K[prob.vx] = W[prob.vv]
+    return K

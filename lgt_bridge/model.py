@@ -1,0 +1,155 @@
+"""The model protocol every adapter implements, and its state layout.
+
+A model holds absolute coordinates ``q`` (the engine's own) and velocities ``V``:
+
+* each rigid body i owns 3 position entries and ν_i - 3 rotation entries of q
+  (:class:`RigidBody`), and 6 entries of V: its twist (ω_i in the body frame,
+  ṙ_i in the inertial frame), angular first;
+* every other coordinate is a vector-space block: q̇ = v, entry by entry.
+
+``f(q, V, t)`` returns dV/dt (ω̇ body, r̈ inertial, v̇), index-1: constraint
+forces resolved inside. Where a model has them it also provides the mass matrix
+M(q) and forces Q(q, V, t) in the same velocity coordinates (M V̇ + Aᵀλ = Q), the
+constraint residual g(q), its Jacobian A(q) with respect to V (ġ = A V) and the
+acceleration term γ(q, V) = (d/dt A) V. These feed the projection after
+explicit steps and the Newton iteration of generalized-α.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import params as _params
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """Where one rigid body lives in q and V."""
+
+    param: _params.Parameterization
+    pos: tuple          # 3 indices into q
+    rot: tuple          # ν - 3 indices into q
+    twist: tuple        # 6 indices into V: (ω, ṙ)
+    name: str = ""
+
+    def __post_init__(self):
+        object.__setattr__(self, "param", _params.get(self.param))
+        if len(self.pos) != 3 or len(self.rot) != self.param.nrot or len(self.twist) != 6:
+            raise InputError(f"body {self.name!r}: {self.param.name} needs 3 position, "
+                             f"{self.param.nrot} rotation and 6 twist indices, got "
+                             f"{len(self.pos)}, {len(self.rot)}, {len(self.twist)}.")
+
+
+@dataclass
+class Layout:
+    """Rigid bodies and vector-space coordinates of a model's q and V."""
+
+    nq: int
+    nv: int
+    bodies: list
+    vector_q: tuple = ()     # indices into q of vector-space coordinates
+    vector_v: tuple = ()     # their rates, same length and order, indices into V
+    names: list = field(default_factory=list)
+
+    def __post_init__(self):
+        self.vector_q = tuple(int(i) for i in self.vector_q)
+        self.vector_v = tuple(int(i) for i in self.vector_v)
+        if len(self.vector_q) != len(self.vector_v):
+            raise InputError(f"layout: {len(self.vector_q)} vector-space coordinates but "
+                             f"{len(self.vector_v)} rates; give one rate per coordinate.")
+        used_q = [i for b in self.bodies for i in (*b.pos, *b.rot)] + list(self.vector_q)
+        used_v = [i for b in self.bodies for i in b.twist] + list(self.vector_v)
+        for what, used, n in (("q", used_q, self.nq), ("V", used_v, self.nv)):
+            if sorted(used) != list(range(n)):
+                missing = sorted(set(range(n)) - set(used))
+                dup = sorted({i for i in used if used.count(i) > 1})
+                raise InputError(f"layout: the entries of {what} must be covered exactly once "
+                                 f"(missing {missing[:8]}, repeated {dup[:8]}).")
+
+    @property
+    def nbodies(self):
+        return len(self.bodies)
+
+    def owner(self, kind, index):
+        """Human-readable owner of entry ``index`` of q or V ('body 2 (link2)', 'coordinate 7')."""
+        for k, b in enumerate(self.bodies):
+            if index in ((*b.pos, *b.rot) if kind == "q" else b.twist):
+                return f"body {k}" + (f" ({b.name})" if b.name else "")
+        return f"{kind}[{index}] (vector-space coordinate)"
+
+    @classmethod
+    def stacked(cls, params, n_vector=0, names=None):
+        """Bodies one after another, q_i = (r, θ), V_i = (ω, ṙ), then n_vector coordinates."""
+        bodies, iq, iv = [], 0, 0
+        for k, p in enumerate(params):
+            p = _params.get(p)
+            bodies.append(RigidBody(p, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + p.nu)),
+                                    tuple(range(iv, iv + 6)), names[k] if names else f"body{k}"))
+            iq += p.nu
+            iv += 6
+        return cls(iq + n_vector, iv + n_vector, bodies,
+                   tuple(range(iq, iq + n_vector)), tuple(range(iv, iv + n_vector)))
+
+
+class Model:
+    """Base class of the model protocol; adapters and scenes subclass it.
+
+    Required: ``layout``, ``q0``, ``V0``, and either ``f`` or ``mass_matrix`` +
+    ``forces`` (then ``f`` solves the index-1 system). Optional: constraint
+    functions (``n_constraints > 0``), ``write_back``.
+    """
+
+    layout: Layout
+    q0: np.ndarray
+    V0: np.ndarray
+    n_constraints = 0
+
+    def f(self, q, V, t):
+        M = self.mass_matrix(q)
+        Q = self.forces(q, V, t)
+        if not self.n_constraints:
+            return np.linalg.solve(M, Q)
+        A = self.constraint_jacobian(q)
+        gam = self.constraint_gamma(q, V)
+        return solve_kkt(M, A, Q, -gam)[0]
+
+    def mass_matrix(self, q):
+        raise NotImplementedError(f"{type(self).__name__} provides no mass matrix")
+
+    def forces(self, q, V, t):
+        raise NotImplementedError(f"{type(self).__name__} provides no forces")
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return np.zeros((0, self.layout.nv))
+
+    def constraint_gamma(self, q, V):
+        return np.zeros(0)
+
+    def write_back(self, q, V, t):
+        """Put the state into the engine (sensors, viewers); nothing for pure-numpy models."""
+
+    @property
+    def has_mass_matrix(self):
+        return type(self).mass_matrix is not Model.mass_matrix
+
+
+def solve_kkt(M, A, rhs_v, rhs_c):
+    """[M Aᵀ; A 0] [x; λ] = [rhs_v; rhs_c] by the range-space method (M SPD)."""
+    L = np.linalg.cholesky(M)
+    def Minv(B):
+        return np.linalg.solve(L.T, np.linalg.solve(L, B))
+    MiAt = Minv(A.T)
+    Miv = Minv(rhs_v)
+    lam = np.linalg.solve(A @ MiAt, A @ Miv - rhs_c)
+    return Miv - MiAt @ lam, lam
+
+
+def _solve_mass_dense(model, q, B):
+    return np.linalg.solve(model.mass_matrix(q), B)
+
+
+Model.solve_mass = _solve_mass_dense
+Model.solve_mass.__doc__ = "M(q)⁻¹ B (dense by default; models with block-diagonal M override it)."

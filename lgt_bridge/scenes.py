@@ -1,0 +1,258 @@
+"""Engine-free reference scenes in pure numpy: each models only what it needs.
+
+* :func:`free_body` — torque-free rigid body (frame at the centre of mass);
+* :func:`heavy_top` — the benchmark heavy top, either rotating about a fixed
+  pivot (the body frame at the pivot, unconstrained rotation) or as a free body
+  at its centre of mass held by a spherical joint (constrained);
+* :func:`chain` — N bodies connected by spherical joints, hanging from a ground joint.
+
+All take ``param`` = "quat" (Exudyn Euler parameters), "quat_xyzw", "rotvec"
+or "rxyz" for the absolute rotation coordinates.
+"""
+import numpy as np
+
+from . import params as _params
+from .errors import InputError
+from .groups import quaternion as _q
+from .groups._vec import cross, hat
+from .model import Layout, Model
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+class RigidBodySystem(Model):
+    """Rigid bodies in absolute coordinates, Newton-Euler in V = (ω body, ṙ inertial).
+
+    bodies: per body ``mass`` and ``inertia`` (3x3, body frame); the body frame is at
+    the centre of mass, unless ``pivot_com`` gives the centre of mass in the body
+    frame of a body whose frame origin is a fixed pivot (then ``inertia`` is about
+    the pivot and the body's position stays where it is).
+    joints: spherical, ``(i, s_i, j, s_j)``: point s_i of body i coincides with point
+    s_j of body j (body frames), j = -1 for ground (s_j a ground point).
+    springs: ``(i, s_i, j, s_j, k, d)`` zero-length spring-dampers between points.
+    load: optional ``load(t, q, V) -> (forces (N,3) inertial, torques (N,3) body)``.
+    """
+
+    def __init__(self, masses, inertias, q0, V0, *, param="quat", gravity=GRAVITY,
+                 pivot_com=None, joints=(), springs=(), load=None, names=None):
+        self.param = _params.get(param)
+        self.nb = nb = len(masses)
+        self.layout = Layout.stacked([self.param] * nb, names=names)
+        self.m = np.asarray(masses, float)
+        self.J = np.asarray(inertias, float).reshape(nb, 3, 3)
+        self.Jinv = np.linalg.inv(self.J)
+        self.g = np.asarray(gravity, float)
+        self.pivot = np.zeros(nb, bool)
+        self.c = np.zeros((nb, 3))
+        for i, c in (pivot_com or {}).items():
+            self.pivot[i], self.c[i] = True, c
+        self.q0, self.V0 = np.asarray(q0, float), np.asarray(V0, float)
+        self.param.validate(self.q0.reshape(nb, -1), "q0")
+        nu = self.param.nu
+        self._qi = np.arange(nb * nu).reshape(nb, nu)
+        self.joints = joints
+        self.n_constraints = 3 * len(joints)
+        if joints:
+            ji = np.array([j[0] for j in joints])
+            jj = np.array([j[2] for j in joints])
+            if np.any(self.pivot[ji]) or np.any(self.pivot[jj[jj >= 0]]):
+                raise InputError("joints attach to bodies with their frame at the centre of mass; "
+                                 "a pivoted body is already held at its pivot.")
+            self._ji, self._jj = ji, jj
+            self._si = np.array([j[1] for j in joints], float)
+            self._sj = np.array([j[3] for j in joints], float)
+            self._ground = jj < 0
+        self.springs = springs
+        self.load = load
+        Minv = np.zeros((nb, 6, 6))
+        Minv[:, :3, :3] = self.Jinv
+        Minv[:, 3:, 3:] = np.eye(3) / self.m[:, None, None]
+        Minv[self.pivot, 3:, 3:] = 0.0            # a pivot's translation is held
+        self._Minv = Minv
+
+    # --- kinematics ------------------------------------------------------------
+    def _poses(self, q):
+        Q = q[self._qi]
+        return Q[:, :3], _q._to_matrix(self.param._to_quat(Q[:, 3:]))
+
+    # --- model protocol ----------------------------------------------------------
+    def mass_matrix(self, q):
+        M = np.zeros((6 * self.nb, 6 * self.nb))
+        for i in range(self.nb):
+            M[6 * i:6 * i + 3, 6 * i:6 * i + 3] = self.J[i]
+            M[6 * i + 3:6 * i + 6, 6 * i + 3:6 * i + 6] = np.eye(3) * self.m[i]
+        return M
+
+    def solve_mass(self, q, B):
+        B = np.asarray(B, float)
+        Bb = B.reshape(self.nb, 6, -1)
+        out = np.einsum("nij,njk->nik", self._Minv, Bb)
+        return out.reshape(B.shape)
+
+    def forces(self, q, V, t):
+        r, R = self._poses(q)
+        W = V.reshape(self.nb, 6)
+        w = W[:, :3]
+        Jw = np.einsum("nij,nj->ni", self.J, w)
+        torque = -cross(w, Jw)
+        force = self.m[:, None] * self.g
+        if self.pivot.any():
+            # gravity moment about the pivot, body frame: c × Rᵀ m g
+            Rtg = np.einsum("nji,j->ni", R[self.pivot], self.g)
+            torque[self.pivot] += cross(self.c[self.pivot], self.m[self.pivot, None] * Rtg)
+            force[self.pivot] = 0.0
+        if self.springs:
+            for (i, si, j, sj, k, d) in self.springs:
+                pi, vi = r[i] + R[i] @ si, W[i, 3:] + R[i] @ np.cross(w[i], si)
+                if j >= 0:
+                    pj, vj = r[j] + R[j] @ sj, W[j, 3:] + R[j] @ np.cross(w[j], sj)
+                else:
+                    pj, vj = np.asarray(sj, float), np.zeros(3)
+                F = k * (pj - pi) + d * (vj - vi)                 # on body i, inertial
+                force[i] += F
+                torque[i] += np.cross(si, R[i].T @ F)
+                if j >= 0:
+                    force[j] -= F
+                    torque[j] -= np.cross(sj, R[j].T @ F)
+        if self.load is not None:
+            F, T = self.load(t, q, V)
+            force = force + F
+            torque = torque + T
+        return np.concatenate([torque, force], axis=1).ravel()
+
+    def f(self, q, V, t):
+        Q = self.forces(q, V, t)
+        if not self.n_constraints:
+            return self.solve_mass(q, Q)
+        A = self.constraint_jacobian(q)
+        gam = self.constraint_gamma(q, V)
+        MiQ = self.solve_mass(q, Q)
+        MiAt = self.solve_mass(q, A.T)
+        lam = np.linalg.solve(A @ MiAt, A @ MiQ + gam)
+        return MiQ - MiAt @ lam
+
+    def constraints(self, q):
+        if not self.n_constraints:
+            return np.zeros(0)
+        r, R = self._poses(q)
+        pi = r[self._ji] + np.einsum("nij,nj->ni", R[self._ji], self._si)
+        pj = np.where(self._ground[:, None], self._sj,
+                      r[self._jj] + np.einsum("nij,nj->ni", R[self._jj], self._sj))
+        return (pi - pj).ravel()
+
+    def constraint_jacobian(self, q):
+        """ġ = A V: for body i, [-R_i s̃_i, I] (and the negative for body j)."""
+        nj = len(self.joints)
+        A = np.zeros((3 * nj, 6 * self.nb))
+        if not nj:
+            return A
+        _, R = self._poses(q)
+        rows = np.arange(3 * nj).reshape(nj, 3)
+        Bi = -R[self._ji] @ hat(self._si)
+        for k in range(nj):
+            i, j = self._ji[k], self._jj[k]
+            A[rows[k, :, None], 6 * i + np.arange(3)] = Bi[k]
+            A[rows[k], 6 * i + 3 + np.arange(3)] = 1.0
+            if j >= 0:
+                A[rows[k, :, None], 6 * j + np.arange(3)] = R[j] @ hat(self._sj[k:k + 1])[0]
+                A[rows[k], 6 * j + 3 + np.arange(3)] = -1.0
+        return A
+
+    def constraint_gamma(self, q, V):
+        """γ = (d/dt A) V = R_i (ω_i × (ω_i × s_i)) - R_j (ω_j × (ω_j × s_j))."""
+        if not self.n_constraints:
+            return np.zeros(0)
+        _, R = self._poses(q)
+        w = V.reshape(self.nb, 6)[:, :3]
+        wi = w[self._ji]
+        gi = np.einsum("nij,nj->ni", R[self._ji], cross(wi, cross(wi, self._si)))
+        wj = w[np.maximum(self._jj, 0)]
+        gj = np.einsum("nij,nj->ni", R[np.maximum(self._jj, 0)], cross(wj, cross(wj, self._sj)))
+        gj[self._ground] = 0.0
+        return (gi - gj).ravel()
+
+    # --- diagnostics ---------------------------------------------------------------
+    def energy(self, q, V):
+        r, R = self._poses(q)
+        W = V.reshape(self.nb, 6)
+        w, v = W[:, :3], W[:, 3:]
+        T = 0.5 * np.einsum("ni,nij,nj->", w, self.J, w) + 0.5 * np.sum(self.m * np.where(self.pivot, 0, 1) * (v * v).sum(1))
+        com = r + np.einsum("nij,nj->ni", R, self.c)
+        U = -np.sum(self.m * (com @ self.g))
+        for (i, si, j, sj, k, d) in self.springs:
+            pi = r[i] + R[i] @ si
+            pj = r[j] + R[j] @ sj if j >= 0 else np.asarray(sj, float)
+            U += 0.5 * k * np.sum((pj - pi) ** 2)
+        return T + U
+
+    def spatial_angular_momentum(self, q, V):
+        """Σ (R J ω + m r × ṙ) about the origin (for free bodies and pivoted bodies)."""
+        r, R = self._poses(q)
+        W = V.reshape(self.nb, 6)
+        L = np.einsum("nij,njk,nk->ni", R, self.J, W[:, :3])
+        L += self.m[:, None] * np.cross(r, W[:, 3:]) * (~self.pivot)[:, None]
+        return L.sum(axis=0)
+
+
+def _rot_coords(param, R0):
+    p = _q._from_matrix(np.asarray(R0, float).reshape(-1, 3, 3))
+    prev = np.zeros((len(p), param.nrot))
+    if param.nrot == 4:
+        prev[:, 0 if param.name == "quat_wxyz" else 3] = 1.0
+    return param._from_quat(p, prev)
+
+
+def free_body(inertia=(1.0, 2.0, 3.0), omega0=(0.01, 2.0, 0.01), *, mass=1.0, R0=None,
+              r0=(0.0, 0.0, 0.0), v0=(0.0, 0.0, 0.0), param="quat"):
+    """Torque-free rigid body (no gravity), frame at the centre of mass."""
+    param = _params.get(param)
+    J = np.diag(inertia) if np.ndim(inertia) == 1 else np.asarray(inertia, float)
+    R0 = np.eye(3) if R0 is None else R0
+    q0 = np.concatenate([r0, _rot_coords(param, R0)[0]])
+    V0 = np.concatenate([omega0, v0]).astype(float)
+    return RigidBodySystem([mass], [J], q0, V0, param=param, gravity=np.zeros(3), names=["body"])
+
+
+HEAVY_TOP = dict(m=15.0, J_com=np.diag([0.234375, 0.46875, 0.234375]), com=np.array([0.0, 1.0, 0.0]),
+                 omega0=np.array([0.0, 150.0, -4.61538]))
+
+
+def heavy_top(constrained=False, *, param="quat", omega0=None, R0=None):
+    """The heavy top benchmark (m = 15, centre of mass (0, 1, 0) from the pivot).
+
+    constrained=False: body frame at the pivot, J = J_com + m(|c|²I - ccᵀ), rotation only.
+    constrained=True: body frame at the centre of mass, spherical joint to ground at the pivot.
+    """
+    param = _params.get(param)
+    m, Jc, c = HEAVY_TOP["m"], HEAVY_TOP["J_com"], HEAVY_TOP["com"]
+    w0 = HEAVY_TOP["omega0"] if omega0 is None else np.asarray(omega0, float)
+    R0 = np.eye(3) if R0 is None else np.asarray(R0, float)
+    rot = _rot_coords(param, R0)[0]
+    if not constrained:
+        Jp = Jc + m * (c @ c * np.eye(3) - np.outer(c, c))
+        return RigidBodySystem([m], [Jp], np.concatenate([np.zeros(3), rot]),
+                               np.concatenate([w0, np.zeros(3)]), param=param,
+                               pivot_com={0: c}, names=["top"])
+    q0 = np.concatenate([R0 @ c, rot])
+    V0 = np.concatenate([w0, R0 @ np.cross(w0, c)])
+    return RigidBodySystem([m], [Jc], q0, V0, param=param, joints=[(0, -c, -1, np.zeros(3))],
+                           names=["top"])
+
+
+def chain(n=5, *, param="quat", length=1.0, mass=1.0, spin=2.0):
+    """n slender links along x joined by spherical joints, the first to ground at the
+    origin; released horizontally while the whole chain turns about the vertical at
+    ``spin`` rad/s (a consistent rigid motion), so it swings and twists in 3-D."""
+    param = _params.get(param)
+    L = length
+    J = mass * np.diag([1e-3 * L * L, L * L / 12, L * L / 12])
+    rot = _rot_coords(param, np.eye(3))[0]
+    q0, V0 = [], []
+    for k in range(n):
+        x = (k + 0.5) * L
+        q0.append(np.concatenate([[x, 0.0, 0.0], rot]))
+        V0.append([0.0, 0.0, spin, 0.0, spin * x, 0.0])
+    half = np.array([L / 2, 0, 0])
+    joints = [(0, -half, -1, np.zeros(3))] + [(k, -half, k - 1, half) for k in range(1, n)]
+    return RigidBodySystem([mass] * n, [J] * n, np.concatenate(q0), np.concatenate(V0).astype(float),
+                           param=param, joints=joints, names=[f"link{k}" for k in range(n)])
