@@ -63,6 +63,12 @@ class LocalProblem:
         self.nv = lay.nv
         self.n_f = 0
         self.cay_rows = np.concatenate([s.xidx[:, :3] for s in self.sets if s.cay] or [np.zeros((0, 3), int)])
+        # exp-coordinate increment -> chart coordinates to second order: cay(ΔX/2) = exp(ΔX) + O(|ΔX|³)
+        # (rotation rows; on SE(3) also the translation rows; the R³ factor of SO(3)xR³ is additive)
+        self.chart_scale = np.ones(self.nX)
+        for s in self.sets:
+            if s.cay:
+                self.chart_scale[s.xidx[:, :6] if s.se3 else s.xidx[:, :3]] = 0.5
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k):

@@ -4,7 +4,7 @@ q_{k+1} = τ(q_k, X_{k+1}). Fixed step (euler, rkmk2, rkmk4) and Dormand-Prince
 import numpy as np
 
 from ..errors import ChartDomainError
-from .base import StepFailed, Stepper
+from .base import StepFailed, Stepper, first_nonfinite
 
 #: a stage whose Cayley coordinates exceed this (|c| = tan(φ/2): φ = 90°) is refused
 CAYLEY_LIMIT = 1.0
@@ -42,8 +42,10 @@ class ExplicitRK(Stepper):
             KX[i], KW[i], q, V = prob.rhs(X, W, t + c[i] * h)
             if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
                 self.check_finite(t + c[i] * h, q, V)
-                raise StepFailed(f"non-finite acceleration at t = {t + c[i] * h:.9g}: the model "
-                                 "returned NaN/inf for a finite state.")
+                where = first_nonfinite(prob.layout, "V", KW[i]) if not np.isfinite(KW[i]).all() else "the kinematics"
+                raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
+                                 f"(stage time {t + c[i] * h:.9g}): the model returned NaN/inf for a "
+                                 "finite state. The result keeps every step before it.")
         X1 = h * (tab.b @ KX)
         W1 = self.W + h * (tab.b @ KW)
         return X1, W1
@@ -130,18 +132,8 @@ class AdaptiveRK(ExplicitRK):
             k_last = (self.KX[-1].copy(), self.KW[-1].copy())
             self.finish(t + h, *self.end_state(X1, W1))
             if tab.fsal and self.projector is None:
-                self._k1 = (W1_to_K0(prob, self.W), k_last[1])
+                self._k1 = (prob.kinematics(np.zeros(prob.nX), self.W), k_last[1])
             return True, h * fac
         self.n_rejected += 1
         self._facmax = 1.0
         return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.order))
-
-
-def W1_to_K0(prob, W):
-    """First stage of the next step: Ẋ at X = 0 is W itself (dψ⁻¹_0 = I)."""
-    K = np.zeros(prob.nX)
-    for s in prob.sets:
-        K[s.xidx] = W[s.vidx]
-    if len(prob.vq):
-        K[prob.vx] = W[prob.vv]
-    return K
