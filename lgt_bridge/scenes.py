@@ -77,11 +77,15 @@ class RigidBodySystem(Model):
 
     # --- model protocol ----------------------------------------------------------
     def mass_matrix(self, q):
-        M = np.zeros((6 * self.nb, 6 * self.nb))
-        for i in range(self.nb):
-            M[6 * i:6 * i + 3, 6 * i:6 * i + 3] = self.J[i]
-            M[6 * i + 3:6 * i + 6, 6 * i + 3:6 * i + 6] = np.eye(3) * self.m[i]
-        return M
+        """Block diagonal and constant in these coordinates: diag(J_i, m_i I)."""
+        if not hasattr(self, "_M"):
+            blocks = np.zeros((self.nb, 6, 6))
+            blocks[:, :3, :3] = self.J
+            blocks[:, 3:, 3:] = self.m[:, None, None] * np.eye(3)
+            M = np.zeros((self.nb, 6, self.nb, 6))
+            M[np.arange(self.nb), :, np.arange(self.nb), :] = blocks
+            self._M = M.reshape(6 * self.nb, 6 * self.nb)
+        return self._M.copy()
 
     def solve_mass(self, q, B):
         B = np.asarray(B, float)
@@ -256,3 +260,18 @@ def chain(n=5, *, param="quat", length=1.0, mass=1.0, spin=2.0):
     joints = [(0, -half, -1, np.zeros(3))] + [(k, -half, k - 1, half) for k in range(1, n)]
     return RigidBodySystem([mass] * n, [J] * n, np.concatenate(q0), np.concatenate(V0).astype(float),
                            param=param, joints=joints, names=[f"link{k}" for k in range(n)])
+
+
+def free_bodies(n=100, *, param="quat", seed=0):
+    """n independent torque-free bodies with random inertias, attitudes and spins (for scaling)."""
+    rng = np.random.default_rng(seed)
+    param = _params.get(param)
+    J = [np.diag(np.sort(rng.uniform(0.5, 3.0, 3))) for _ in range(n)]
+    p = rng.normal(size=(n, 4))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    R0 = _q._to_matrix(p)
+    rot = _rot_coords(param, R0)
+    q0 = np.concatenate([rng.normal(size=(n, 3)), rot], axis=1).ravel()
+    V0 = np.concatenate([rng.normal(size=(n, 3)) * 2.0, rng.normal(size=(n, 3))], axis=1).ravel()
+    return RigidBodySystem(np.ones(n), J, q0, V0, param=param, gravity=np.zeros(3),
+                           names=[f"body{k}" for k in range(n)])

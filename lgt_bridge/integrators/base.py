@@ -28,12 +28,13 @@ class Stepper:
         self.n_rejected = 0
         self.n_newton = 0
 
-    def set_state(self, q, V):
-        """Start (or restart) from model coordinates (q, V)."""
+    def set_state(self, q, V, W=None, quats=None):
+        """Start (or restart) from model coordinates (q, V); a step that ends at (q, V)
+        passes its W and body quaternions along so they need not be recomputed."""
         self.q = np.array(q, float)
-        self.prob.start(self.q)
-        self.W = self.prob.group_velocity(np.array(V, float), [b[2] for b in self.prob.bases])
+        self.prob.start(self.q, quats)
         self.V = np.array(V, float)
+        self.W = self.prob.group_velocity(self.V, self.prob.start_quats) if W is None else W
 
     def check_finite(self, t, q, V):
         for kind, arr in (("q", q), ("V", V)):
@@ -42,9 +43,10 @@ class Stepper:
                                  f"{first_nonfinite(self.prob.layout, kind, arr)}; the model "
                                  "returned NaN/inf or the step diverged (try a smaller dt).")
 
-    def finish(self, t1, q1, V1):
+    def finish(self, t1, q1, V1, W1=None, quats=None):
         """Accept (q1, V1) at t1, after projection onto the constraints if the model has them."""
         self.check_finite(t1, q1, V1)
         if self.projector is not None:
             q1, V1 = self.projector(q1, V1)
-        self.set_state(q1, V1)
+            W1 = quats = None
+        self.set_state(q1, V1, W1, quats)

@@ -14,12 +14,7 @@ from .local import LocalProblem
 
 def twist_to_local(prob, d):
     """Map a vector in V's layout to X's layout (bodies: same 6 numbers; vector part: rates)."""
-    X = np.zeros(prob.nX)
-    for s in prob.sets:
-        X[s.xidx] = d[s.vidx]
-    if len(prob.vq):
-        X[prob.vx] = d[prob.vv]
-    return X
+    return prob.to_local(d)
 
 
 class Projector:

@@ -56,7 +56,7 @@ class GenAlpha(Stepper):
     def start(self, t0):
         """Initial accelerations from the index-1 solve: Ẇ_0, a_0 = Ẇ_0."""
         prob = self.prob
-        quats = [b[2] for b in prob.bases]
+        quats = prob.start_quats
         Vd = prob.model.f(self.q, self.V, t0)
         prob.n_f += 1
         self.Wd = prob.group_acceleration(Vd, self.W, quats)
@@ -149,5 +149,5 @@ class GenAlpha(Stepper):
         V1 = self.prob.model_velocity(W1, quats)
         self._prev = (h, self.Wd, self.lam)
         self.Wd, self.a, self.lam = Wd1, a1, lam
-        self.finish(t1, q1, V1)
+        self.finish(t1, q1, V1, W1, quats)
         return True, None

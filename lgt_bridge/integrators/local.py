@@ -71,9 +71,17 @@ class LocalProblem:
                 self.chart_scale[s.xidx[:, :6] if s.se3 else s.xidx[:, :3]] = 0.5
 
     # --- per step ---------------------------------------------------------------
-    def start(self, q_k):
+    def start(self, q_k, quats=None):
+        """Prepare the step from q_k (``quats``: the bodies' quaternions, when known)."""
         self.q_k = q_k
-        self.bases = [s.lgt.base(q_k[s.qidx]) for s in self.sets]
+        if quats is None:
+            self.bases = [s.lgt.base(q_k[s.qidx]) for s in self.sets]
+        else:
+            self.bases = [(q_k[s.qidx[:, :3]], q_k[s.qidx[:, 3:]], p) for s, p in zip(self.sets, quats)]
+
+    @property
+    def start_quats(self):
+        return [b[2] for b in self.bases]
 
     def configuration(self, X):
         """q = τ(q_k, X) and the quaternion of every body set."""
@@ -127,13 +135,28 @@ class LocalProblem:
             Xd[self.vx] = W[self.vv]
         return Xd
 
-    def rhs(self, X, W, t):
-        """(Ẋ, Ẇ) of the local ODE, and the q, V it was evaluated at."""
-        q, quats = self.configuration(X)
+    def rhs(self, X, W, t, at_start=False):
+        """(Ẋ, Ẇ) of the local ODE, and the q, V it was evaluated at.
+        ``at_start``: X = 0, where q = q_k and Ẋ = dψ⁻¹_0(W) = chart_scale · W."""
+        if at_start:
+            q, quats = self.q_k, self.start_quats
+            Xd = self.chart_scale * self.to_local(W)
+        else:
+            q, quats = self.configuration(X)
+            Xd = self.kinematics(X, W)
         V = self.model_velocity(W, quats)
         Vd = self.model.f(q, V, t)
         self.n_f += 1
-        return self.kinematics(X, W), self.group_acceleration(Vd, W, quats), q, V
+        return Xd, self.group_acceleration(Vd, W, quats), q, V
+
+    def to_local(self, d):
+        """A vector in V's layout as X's layout (bodies: the same 6 numbers; vector part: rates)."""
+        X = np.empty(self.nX)
+        for s in self.sets:
+            X[s.xidx] = d[s.vidx]
+        if len(self.vq):
+            X[self.vx] = d[self.vv]
+        return X
 
     def max_cayley(self, X):
         """Largest |c| among Cayley-chart bodies (a half-turn is |c| -> ∞)."""

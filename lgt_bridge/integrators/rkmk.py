@@ -19,8 +19,8 @@ class ExplicitRK(Stepper):
         self.KW = np.zeros((tableau.stages, problem.nv))
         self._k1 = None                        # FSAL: the first stage of the next step
 
-    def set_state(self, q, V):
-        super().set_state(q, V)
+    def set_state(self, q, V, W=None, quats=None):
+        super().set_state(q, V, W, quats)
         self._k1 = None
 
     def stages(self, t, h):
@@ -30,29 +30,35 @@ class ExplicitRK(Stepper):
         X0 = np.zeros(prob.nX)
         for i in range(tab.stages):
             if i == 0:
-                X, W = X0, self.W
                 if self._k1 is not None:
                     KX[0], KW[0] = self._k1
-                    continue
+                else:
+                    KX[0], KW[0], q, V = prob.rhs(X0, self.W, t, at_start=True)
+                    self._check_stage(KX[0], KW[0], t, t, q, V)
+                continue
             else:
                 X = h * (A[i, :i] @ KX[:i])
                 W = self.W + h * (A[i, :i] @ KW[:i])
                 if prob.max_cayley(X) > CAYLEY_LIMIT:
                     raise _CayleyLimit(prob.max_cayley(X))
             KX[i], KW[i], q, V = prob.rhs(X, W, t + c[i] * h)
-            if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
-                self.check_finite(t + c[i] * h, q, V)
-                where = first_nonfinite(prob.layout, "V", KW[i]) if not np.isfinite(KW[i]).all() else "the kinematics"
-                raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
-                                 f"(stage time {t + c[i] * h:.9g}): the model returned NaN/inf for a "
-                                 "finite state. The result keeps every step before it.")
+            self._check_stage(KX[i], KW[i], t, t + c[i] * h, q, V)
         X1 = h * (tab.b @ KX)
         W1 = self.W + h * (tab.b @ KW)
         return X1, W1
 
+    def _check_stage(self, KX, KW, t, ts, q, V):
+        if not (np.isfinite(KW).all() and np.isfinite(KX).all()):
+            self.check_finite(ts, q, V)
+            where = first_nonfinite(self.prob.layout, "V", KW) if not np.isfinite(KW).all() else "the kinematics"
+            raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
+                             f"(stage time {ts:.9g}): the model returned NaN/inf for a "
+                             "finite state. The result keeps every step before it.")
+
     def end_state(self, X1, W1):
+        """(q1, V1, W1, quats) at the end of the step."""
         q1, quats = self.prob.configuration(X1)
-        return q1, self.prob.model_velocity(W1, quats)
+        return q1, self.prob.model_velocity(W1, quats), W1, quats
 
 
 class _CayleyLimit(Exception):
@@ -132,7 +138,7 @@ class AdaptiveRK(ExplicitRK):
             k_last = (self.KX[-1].copy(), self.KW[-1].copy())
             self.finish(t + h, *self.end_state(X1, W1))
             if tab.fsal and self.projector is None:
-                self._k1 = (prob.kinematics(np.zeros(prob.nX), self.W), k_last[1])
+                self._k1 = (prob.chart_scale * prob.to_local(self.W), k_last[1])
             return True, h * fac
         self.n_rejected += 1
         self._facmax = 1.0

@@ -43,5 +43,5 @@ class ScipyStepper(Stepper):
             self.n_rejected += 1
             return False, 0.5 * h
         q1, quats = prob.configuration(X1)
-        self.finish(t + h, q1, prob.model_velocity(W1, quats))
+        self.finish(t + h, q1, prob.model_velocity(W1, quats), W1, quats)
         return True, None
