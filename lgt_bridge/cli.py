@@ -3,6 +3,36 @@ import argparse
 import sys
 
 
+def _run_script(a):
+    """Execute ``a.script`` as __main__ with every registered adapter's solver routing active."""
+    import contextlib
+    import runpy
+    import time
+
+    from .plugins import adapters
+    options = dict(method=a.method, group=a.group, chart=a.chart, rtol=a.rtol, atol=a.atol)
+    t0 = time.perf_counter()
+    with contextlib.ExitStack() as stack:
+        routed = []
+        for name, ep in sorted(adapters().items()):
+            try:
+                plugin = ep.load()
+            except ImportError:
+                continue
+            if hasattr(plugin, "patch"):
+                routed.append((name, stack.enter_context(plugin.patch(options))))
+        if not routed:
+            print("lgt-bridge run: no engine adapter is installed (pip install 'lgt-bridge[exudyn]').",
+                  file=sys.stderr)
+            return 2
+        sys.argv = [a.script]
+        runpy.run_path(a.script, run_name="__main__")
+    n = sum(len(calls) for _, calls in routed)
+    print(f"lgt-bridge run: {a.script}: {n} solver call(s) routed through the bridge "
+          f"({a.method}, {a.group}, {a.chart}); total {time.perf_counter() - t0:.2f} s")
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="lgt-bridge", description="Lie group integration of "
                                  "absolute-coordinate multibody models (Exudyn, Pinocchio).")
@@ -13,7 +43,17 @@ def main(argv=None):
     d.add_argument("--param", default="quat", choices=["quat", "rotvec", "rxyz"],
                    help="absolute rotation coordinates of the top (default quat)")
     d.add_argument("--pivot", action="store_true", help="frame at the pivot instead of the joint form")
+    r = sub.add_parser("run", help="run an unmodified engine script with its solver calls "
+                       "(Exudyn SolveDynamic) routed through the bridge")
+    r.add_argument("script", help="the legacy script (.py)")
+    r.add_argument("--method", default="dopri5")
+    r.add_argument("--group", default="SE3", choices=["SE3", "SO3xR3"])
+    r.add_argument("--chart", default="exp", choices=["exp", "cay"])
+    r.add_argument("--rtol", type=float, default=None)
+    r.add_argument("--atol", type=float, default=None)
     a = ap.parse_args(argv)
+    if a.cmd == "run":
+        return _run_script(a)
     if a.cmd in (None, "demo"):
         from . import demo
         demo.run(sys.stdout, T=getattr(a, "T", 0.1), param=getattr(a, "param", "quat"),

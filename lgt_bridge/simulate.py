@@ -107,6 +107,64 @@ class _Progress:
             sys.stderr.flush()
 
 
+def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
+                 project=True, rho_inf=0.9, newton_tol=1e-10, span=None):
+    """The stepper object behind a method name, with its local problem and projector.
+    Returns (stepper, dt) where dt is the (macro) step to use (None: adaptive, chosen
+    by the stepper)."""
+    prob = LocalProblem(model, group, chart)
+    explicit = method != "genalpha"
+    projector = Projector(model) if (explicit and project and model.n_constraints) else None
+    if method in FIXED:
+        return FixedRK(prob, FIXED[method], projector), dt
+    if method in ADAPTIVE:
+        return AdaptiveRK(prob, ADAPTIVE[method], rtol, atol, projector, first_step=dt), dt
+    if method == "genalpha":
+        return GenAlpha(prob, rho_inf=rho_inf, newton_tol=newton_tol), dt
+    stepper = ScipyStepper(prob, method[6:], rtol, atol, projector)
+    if dt is None:
+        wmax = max([np.abs(model.V0[list(b.twist[:3])]).max() for b in model.layout.bodies] + [1e-12])
+        dt = min((span[1] - span[0]) / 10, 0.5 / wmax) if span else 0.5 / wmax
+    return stepper, dt
+
+
+class Driver:
+    """Advances a stepper to target times: fixed steps of dt (the last one shortened to
+    land on the target) or adaptive steps; counts steps; raises StepFailed."""
+
+    def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000):
+        self.model, self.stepper = model, stepper
+        self.dt, self.t, self.max_steps = dt, float(t0), max_steps
+        self.n_steps = 0
+        stepper.set_state(q0, V0)
+        self.h = dt if dt is not None else stepper.initial_step(self.t)
+
+    def advance_to(self, target, on_step=None):
+        st = self.stepper
+        while self.t < target:
+            if self.n_steps >= self.max_steps:
+                raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
+            h_try = min(self.h, target - self.t)
+            hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
+            if hit:
+                h_try = target - self.t
+            accepted, h_new = st.attempt(self.t, h_try)
+            if accepted:
+                self.n_steps += 1
+                self.t = target if hit else self.t + h_try
+                self.model.write_back(st.q, st.V, self.t)
+                if st.adaptive:
+                    self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
+                else:
+                    self.h = h_new if h_new is not None else self.dt
+                if on_step is not None:
+                    on_step(self.t, st.q, st.V)
+            else:
+                self.h = h_new
+                if self.h < 1e-14 * max(1.0, abs(self.t)):
+                    raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+
+
 def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
              atol=1e-8, q0=None, V0=None, t_eval=None, progress=False, max_steps=1_000_000,
              project=True, rho_inf=0.9, newton_tol=1e-10):
@@ -122,87 +180,46 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     """
     t0, t1, q0, V0, t_eval = _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval,
                                            max_steps)
-    prob = LocalProblem(model, group, chart)
-    explicit = method != "genalpha"
-    projector = Projector(model) if (explicit and project and model.n_constraints) else None
-    if method in FIXED:
-        stepper = FixedRK(prob, FIXED[method], projector)
-    elif method in ADAPTIVE:
-        stepper = AdaptiveRK(prob, ADAPTIVE[method], rtol, atol, projector, first_step=dt)
-    elif method == "genalpha":
-        stepper = GenAlpha(prob, rho_inf=rho_inf, newton_tol=newton_tol)
-    else:
-        stepper = ScipyStepper(prob, method[6:], rtol, atol, projector)
-        if dt is None:
-            wmax = max([np.abs(V0[list(b.twist[:3])]).max() for b in model.layout.bodies] + [1e-12])
-            dt = min((t1 - t0) / 10, 0.5 / wmax)
-    stepper.set_state(q0, V0)
+    stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
+                               project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=(t0, t1))
     wall0 = time.perf_counter()
-    h = dt if dt is not None else stepper.initial_step(t0)
-    targets = list(t_eval) if t_eval is not None else [t1]
-    if targets[-1] < t1:
-        targets.append(t1)
-    record_all = t_eval is None
+    drv = Driver(model, stepper, dt, t0, q0, V0, max_steps)
     ts, qs, Vs = [], [], []
-    if record_all or (t_eval is not None and t_eval[0] == t0):
+    record_all = t_eval is None
+    targets = [t1] if record_all else [t for t in t_eval if t > t0]
+    if record_all or t_eval[0] == t0:
         ts.append(t0), qs.append(q0.copy()), Vs.append(V0.copy())
-    if t_eval is not None and t_eval[0] == t0:
-        targets = targets[1:]
-    t, n_steps, success, message = t0, 0, True, "reached the end of t_span"
     bar = _Progress(progress, t0, t1)
-    ti = 0
-    while ti < len(targets):
-        target = targets[ti]
-        h_try = min(h, target - t)
-        hit = target - (t + h_try) <= 1e-12 * max(1.0, abs(target))
-        if hit:
-            h_try = target - t
-        try:
-            accepted, h_new = stepper.attempt(t, h_try)
-        except StepFailed as exc:
-            if exc.error is ChartDomainError:
-                err = ChartDomainError(str(exc))
-                err.result = _result(ts, qs, Vs, False, str(exc), stepper, prob, projector, n_steps,
-                                     wall0, method, group, chart, model)
-                raise err from None
-            success, message = False, str(exc)
-            break
-        if accepted:
-            n_steps += 1
-            t = target if hit else t + h_try
-            model.write_back(stepper.q, stepper.V, t)
-            if hit:
-                ti += 1
-            if record_all or hit:
-                if record_all or t_eval is None or ti <= len(t_eval):
-                    ts.append(t), qs.append(stepper.q.copy()), Vs.append(stepper.V.copy())
-            if stepper.adaptive:
-                h = max(h_new, h) if hit and h_new < h else h_new
-            elif h_new is not None:
-                h = h_new
-            else:
-                h = dt
-            bar(t, n_steps)
-        else:
-            h = h_new
-            if h < 1e-14 * max(1.0, abs(t)):
-                success, message = False, f"step size underflow at t = {t:.9g} (h = {h:.3g})"
-                break
-        if n_steps >= max_steps and ti < len(targets):
-            success, message = False, f"max_steps = {max_steps} reached at t = {t:.9g}"
-            break
-    if t_eval is not None and len(ts) > len(t_eval):
-        ts, qs, Vs = ts[:len(t_eval)], qs[:len(t_eval)], Vs[:len(t_eval)]
-    bar(t, n_steps, final=True)
-    if not success:
-        model.write_back(stepper.q, stepper.V, t)
-    return _result(ts, qs, Vs, success, message, stepper, prob, projector, n_steps, wall0,
-                   method, group, chart, model)
+
+    def on_step(t, q, V):
+        if record_all:
+            ts.append(t), qs.append(q.copy()), Vs.append(V.copy())
+        bar(t, drv.n_steps)
+
+    success, message = True, "reached the end of t_span"
+    try:
+        for target in targets:
+            drv.advance_to(target, on_step)
+            if not record_all:
+                ts.append(drv.t), qs.append(stepper.q.copy()), Vs.append(stepper.V.copy())
+        if drv.t < t1:
+            drv.advance_to(t1, on_step)
+    except StepFailed as exc:
+        if exc.error is ChartDomainError:
+            err = ChartDomainError(str(exc))
+            err.result = _result(ts, qs, Vs, False, str(exc), stepper, drv.n_steps, wall0,
+                                 method, group, chart, model)
+            model.write_back(stepper.q, stepper.V, drv.t)
+            raise err from None
+        success, message = False, str(exc)
+        model.write_back(stepper.q, stepper.V, drv.t)
+    bar(drv.t, drv.n_steps, final=True)
+    return _result(ts, qs, Vs, success, message, stepper, drv.n_steps, wall0, method, group, chart, model)
 
 
-def _result(ts, qs, Vs, success, message, stepper, prob, projector, n_steps, wall0, method, group,
-            chart, model):
-    stats = dict(n_steps=n_steps, n_f=prob.n_f, n_rejected=stepper.n_rejected,
+def _result(ts, qs, Vs, success, message, stepper, n_steps, wall0, method, group, chart, model):
+    projector = stepper.projector
+    stats = dict(n_steps=n_steps, n_f=stepper.prob.n_f, n_rejected=stepper.n_rejected,
                  n_newton=stepper.n_newton, wall_s=time.perf_counter() - wall0)
     if projector is not None:
         stats.update(constraint_before_projection=projector.max_before,

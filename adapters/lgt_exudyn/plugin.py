@@ -1,0 +1,24 @@
+"""Entry point of the Exudyn adapter (group ``lgt_bridge.adapters``)."""
+
+
+class _ExudynPlugin:
+    name = "exudyn"
+
+    @staticmethod
+    def accepts(obj):
+        t = type(obj)
+        return t.__name__ == "MainSystem" and t.__module__.startswith("exudyn")
+
+    @staticmethod
+    def wrap(obj, **options):
+        from .model import ExudynModel
+        return ExudynModel(obj, **options)
+
+    @staticmethod
+    def patch(options):
+        """Context manager routing every exu.SolveDynamic / mbs.SolveDynamic to the bridge."""
+        from .run import route_solve_dynamic
+        return route_solve_dynamic(options)
+
+
+PLUGIN = _ExudynPlugin()

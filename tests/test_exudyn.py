@@ -1,0 +1,225 @@
+"""The Exudyn adapter and drop-in solver (skipped only when exudyn is not installed)."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from lgt_bridge import InputError, StepError, lgt, scenes, wrap  # noqa: E402
+from lgt_bridge.simulate import simulate  # noqa: E402
+from lgt_exudyn import ExudynModel, SolveDynamic  # noqa: E402
+
+import exudyn_models as em  # noqa: E402
+import references as ref  # noqa: E402
+
+NODES = [(em.EP, "quat"), (em.ROTVEC, "rotvec"), (em.RXYZ, "rxyz")]
+HERE = Path(__file__).parent
+
+
+def R_of(model, q, k=0):
+    b = model.layout.bodies[k]
+    return b.param.alpha(q[[*b.pos, *b.rot]])[:3, :3]
+
+
+def test_wrap_finds_the_exudyn_adapter():
+    SC, mbs, _ = em.heavy_top()
+    assert isinstance(wrap(mbs), ExudynModel)
+
+
+@pytest.mark.parametrize("node,param", NODES, ids=["EP", "RotVecLG", "Rxyz"])
+def test_f_equals_engine_free_scene(node, param, rng):
+    SC, mbs, _ = em.heavy_top(node)
+    m, s = ExudynModel(mbs), scenes.heavy_top(True, param=param)
+    assert np.allclose(m.q0, s.q0, atol=1e-15) and np.allclose(m.V0, s.V0, atol=1e-13)
+    for _ in range(5):
+        q = lgt.tau(s.q0, rng.normal(size=6) * 0.7, param, "SO3xR3", "exp")
+        V = rng.normal(size=6) * 5
+        t = rng.uniform(0, 1)
+        assert np.abs(m.f(q, V, t) - s.f(q, V, t)).max() < 1e-8
+        assert np.abs(m.constraints(q) - s.constraints(q)).max() < 1e-14
+        assert np.abs(m.constraint_jacobian(q) - s.constraint_jacobian(q)).max() < 1e-14
+        assert np.abs(m.mass_matrix(q) - s.mass_matrix(q)).max() < 1e-12
+
+
+@pytest.mark.parametrize("make", [lambda: em.heavy_top()[:2], em.spring_body_with_load, em.mixed_with_point_mass,
+                                  lambda: em.chain(5, joint="revolute")], ids=["top", "spring", "mixed", "revchain"])
+def test_initial_accelerations_match_exudyn(make):
+    SC, mbs = make()
+    s = em.settings(1.0, 10)
+    S = exu.MainSolverImplicitSecondOrder()
+    S.InitializeSolver(mbs, s)                       # computes Exudyn's consistent initial accelerations
+    acc = np.array(mbs.systemData.GetODE2Coordinates_tt())
+    m = ExudynModel(mbs)
+    mine = m.accelerations(m.q0, m.V0, 0.0)
+    assert np.abs(mine - acc).max() <= 1e-7 * max(1.0, np.abs(acc).max())
+
+
+def test_heavy_top_with_joint_reproduces_reference_and_exudyn_converges():
+    """EP nodes + spherical joint (Exudyn's explicit solvers refuse this model): the bridge's
+    dopri5 on the Exudyn model against an independent plain-quaternion DOP853 reference
+    (rtol 1e-13) at t = 2 s; Exudyn's own generalized-α converges to it at 2nd order."""
+    T = 2.0
+    Rref, wref = ref.heavy_top(T)
+    com = np.array([0.0, 1.0, 0.0])
+    SC, mbs, _ = em.heavy_top(em.EP)
+    m = ExudynModel(mbs)
+    r = simulate(m, (0, T), method="dopri5", group="SO3xR3", rtol=1e-10, atol=1e-10, t_eval=[T])
+    assert r.success
+    assert np.abs(R_of(m, r.q[-1]) - Rref).max() <= 1e-8
+    assert np.abs(r.q[-1][:3] - Rref @ com).max() <= 1e-8
+    assert np.abs(r.V[-1, :3] - wref).max() <= 1e-8 * np.abs(wref).max()
+    errs, hs = [], [2e-4, 1e-4, 5e-5]
+    for h in hs:
+        SC2, mbs2, _ = em.heavy_top(em.EP)
+        mbs2.SolveDynamic(em.settings(T, int(round(T / h))))
+        errs.append(ref.angle(R_of(m, em.total_q(mbs2)), Rref))
+    assert abs(ref.slope(hs, errs) - 2.0) <= 0.2, errs
+    assert ref.angle(R_of(m, r.q[-1]), Rref) < errs[-1] / 1000
+
+
+def _native_pair(make, T, n):
+    """Exudyn's generalized-α at n and 2n steps: final coordinates and an error estimate."""
+    out = []
+    for k in (n, 2 * n):
+        SC, mbs = make()[:2]
+        mbs.SolveDynamic(em.settings(T, k))
+        out.append(em.total_q(mbs))
+    return out[1], np.abs(out[1] - out[0]).max()
+
+
+@pytest.mark.parametrize("make,T,n", [
+    (lambda: em.chain(5), 0.5, 4000),
+    (lambda: em.chain(5, joint="revolute"), 0.5, 4000),
+    (em.spring_body_with_load, 1.0, 20000),
+    (em.mixed_with_point_mass, 0.1, 8000),
+], ids=["spherical-chain", "revolute-chain", "spring-load", "mixed-point-mass"])
+def test_bridge_agrees_with_native_generalized_alpha(make, T, n):
+    """Both sides carry integration error; each is estimated by refinement (native: step
+    halving, bridge: tolerance / 100), and the runs must agree within twice the sum."""
+    q_native, est = _native_pair(make, T, n)
+    qb = []
+    for tol in (1e-10, 1e-12):
+        SC, mbs = make()[:2]
+        r = simulate(ExudynModel(mbs), (0, T), method="dopri5", rtol=tol, atol=tol, t_eval=[T])
+        assert r.success, r.message
+        qb.append(r.q[-1])
+    est_b = np.abs(qb[1] - qb[0]).max()
+    diff = np.abs(qb[1] - q_native).max()
+    assert diff <= 2 * (est + est_b) + 1e-10, (diff, est, est_b)
+    assert max(est, est_b) < 1e-6                        # both converged far enough to compare
+
+
+@pytest.mark.parametrize("eps,tol", [(0.05, 1e-9), (1e-3, 1e-8)])
+def test_rxyz_node_through_gimbal_lock_matches_ep(eps, tol):
+    """Start eps below θ1 = π/2: the spinning top then drives θ1 through ±π/2 repeatedly.
+    Exudyn gives M and Q of an Rxyz node in angle coordinates only, so mapping them to
+    twists costs ~eps_mach/cos²θ1: the agreement is bounded by the closest pass."""
+    from scipy.spatial.transform import Rotation
+    R0 = Rotation.from_euler("XYZ", [0, np.pi / 2 - eps, 0]).as_matrix()
+    T, dt = 0.1, 2e-4
+    SCe, me, _ = em.heavy_top(em.EP, R0=R0)
+    SCr, mr, node = em.heavy_top(em.RXYZ, R0=R0)
+    Me, Mr = ExudynModel(me), ExudynModel(mr)
+    re_ = simulate(Me, (0, T), method="rkmk4", dt=dt)
+    rr = simulate(Mr, (0, T), method="rkmk4", dt=dt)
+    assert rr.success and np.isfinite(rr.q).all()
+    assert ref.angle(R_of(Me, re_.q[-1]), R_of(Mr, rr.q[-1])) < tol
+    d = np.abs(np.diff(rr.q[:, 3:], axis=0))
+    assert d[:, 1].max() < 2 * 150 * dt and d[:, [0, 2]].max() < np.pi / 2
+    assert rr.q[:, 4].max() > 3 * np.pi / 2                            # θ1 went through π/2 and 3π/2
+    assert np.allclose(em.total_q(mr), rr.q[-1], atol=1e-14)          # final state written back
+
+
+def _drop_in_run(tmp_path, tag, bridge):
+    SC, mbs, node = em.heavy_top(em.EP)
+    s1 = mbs.AddSensor(exu.utilities.SensorNode(nodeNumber=node, storeInternal=True, fileName=str(tmp_path / f"{tag}_w.txt"),
+                                                outputVariableType=exu.OutputVariableType.AngularVelocity))
+    s2 = mbs.AddSensor(exu.utilities.SensorNode(nodeNumber=node, storeInternal=True,
+                                                outputVariableType=exu.OutputVariableType.Position))
+    mbs.Assemble()
+    s = em.settings(0.02, 200, write=True, sensors=True)
+    s.solution.file.name = str(tmp_path / f"{tag}_sol.txt")
+    s.solution.file.writePeriod = 0.002
+    s.solution.sensors.writePeriod = 0.001
+    if bridge:
+        SolveDynamic(mbs, s, method="dopri5", rtol=1e-10, atol=1e-10)
+    else:
+        mbs.SolveDynamic(s)
+    return mbs, [mbs.GetSensorStoredData(k) for k in (s1, s2)]
+
+
+def _rows(path):
+    lines = [ln for ln in Path(path).read_text().splitlines() if ln and not ln.startswith("#")]
+    return len(lines), {len(ln.split(",")) for ln in lines}
+
+
+def test_drop_in_sensors_and_solution_file_as_exudyn_writes_them(tmp_path):
+    mn, native = _drop_in_run(tmp_path, "native", False)
+    mb, bridged = _drop_in_run(tmp_path, "bridge", True)
+    for a, b in zip(native, bridged):
+        assert a.shape == b.shape and np.array_equal(a[:, 0], b[:, 0])
+        assert np.abs(a[:, 1:] - b[:, 1:]).max() < 1e-2 * np.abs(a[:, 1:]).max()   # native is only 2nd order
+    assert _rows(tmp_path / "native_sol.txt") == _rows(tmp_path / "bridge_sol.txt")
+    assert _rows(tmp_path / "native_w.txt") == _rows(tmp_path / "bridge_w.txt")
+    st = mb.sys["lgtBridgeStats"]
+    assert st["success"] and st["n_f"] > 0 and st["exudyn_steps"] == 200
+    sd = mb.systemData
+    assert sd.GetTime() == pytest.approx(0.02)
+    p = em.total_q(mb)[3:]
+    assert abs(np.linalg.norm(p) - 1) < 1e-14                        # EP unit without the constraint
+    acc = np.array(sd.GetODE2Coordinates_tt())
+    assert np.isfinite(acc).all() and np.abs(acc).max() > 1.0         # accelerations written
+
+
+def test_lgt_bridge_run_routes_a_legacy_script():
+    script = HERE / "legacy" / "exudyn_pendulum.py"
+    native = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, check=True)
+    routed = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "rkmk4"],
+                            capture_output=True, text=True, check=True)
+    assert "ran rkmk4 on SE3/exp: 300 steps" in routed.stdout and "f evaluations" in routed.stdout
+    pos = lambda out: np.array([float(v) for v in out.split("FINAL_POSITION")[1].split()[:3]])
+    assert np.abs(pos(native.stdout) - pos(routed.stdout)).max() < 1e-3
+    assert exu.SolveDynamic.__module__ == "exudyn.solver"            # nothing left patched here
+
+
+def test_bad_input():
+    SC, mbs, _ = em.heavy_top(assemble=False)
+    with pytest.raises(InputError, match="not assembled"):
+        ExudynModel(mbs)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    n = mbs.AddNode(exu.utilities.NodeGenericODE1(referenceCoordinates=[0.0], initialCoordinates=[1.0],
+                                                  numberOfODE1Coordinates=1))
+    mbs.AddObject(exu.utilities.ObjectODE1(nodeNumbers=[n], massMatrix=np.eye(1)) if hasattr(exu.utilities, "ObjectODE1")
+                  else exu.utilities.ObjectGenericODE1(nodeNumbers=[n], systemMatrix=-np.eye(1)))
+    mbs.Assemble()
+    with pytest.raises(InputError, match="ODE1"):
+        ExudynModel(mbs)
+    SC, mbs, node = em.heavy_top(assemble=False)
+    mbs.SetNodeParameter(node, "initialVelocities", [np.nan, 0, 0, 0, 0, 0, 0])
+    mbs.Assemble()                                   # Exudyn accepts it
+    with pytest.raises(InputError, match="not finite"):
+        ExudynModel(mbs)
+
+
+def test_failing_step_leaves_system_at_last_good_state():
+    SC, mbs = em.spring_body_with_load()[:2]
+    load = [i for i in range(mbs.systemData.NumberOfLoads())][0]
+    mbs.SetLoadParameter(load, "loadVectorUserFunction",
+                         lambda mbs, t, l: [np.nan, 0, 0] if t > 0.0205 else [1.0, 0, 0])
+    m = ExudynModel(mbs)
+    r = simulate(m, (0, 0.1), method="rkmk4", dt=1e-3)
+    assert not r.success and "step from t = 0.02" in r.message
+    assert r.t[-1] == pytest.approx(0.02)
+    assert mbs.systemData.GetTime() == pytest.approx(0.02)
+    assert np.allclose(em.total_q(mbs), r.q[-1], atol=1e-15) and np.isfinite(em.total_q(mbs)).all()
+    SC, mbs = em.spring_body_with_load()[:2]
+    mbs.SetLoadParameter(load, "loadVectorUserFunction",
+                         lambda mbs, t, l: [np.nan, 0, 0] if t > 0.0205 else [1.0, 0, 0])
+    with pytest.raises(StepError, match="left at t = 0.02"):
+        SolveDynamic(mbs, em.settings(0.1, 100), method="rkmk4")
+    assert mbs.systemData.GetTime() == pytest.approx(0.02) and np.isfinite(em.total_q(mbs)).all()
