@@ -17,7 +17,9 @@ SO(3)xR³. On SE(3) the integrator uses the body twist (ω, Rᵀṙ); see
 """
 import numpy as np
 
-from . import _checks, params
+from . import _checks, _series, params
+from .groups._vec import cross as _cross
+from .groups._vec import norm as _norm
 from .errors import InputError
 from .groups import quaternion as _q
 from .groups import se3 as _se3
@@ -81,11 +83,21 @@ class LGT:
         """(τ(q_k, X), p): the coordinates and the unit quaternion (scalar first) of the pose."""
         r, rot, pk = base
         x, y = X[:, :3], X[:, 3:]
-        dp = _chart_quat(self.chart, x)
+        if self.chart == "exp":
+            # φ, sinc(φ/2), cos(φ/2) serve both the quaternion and dexp_x y (β = sinc²(φ/2))
+            phi = _norm(x)
+            sh = _series.sinc(0.5 * phi)
+            dp = np.concatenate([np.cos(0.5 * phi)[:, None], (0.5 * sh)[:, None] * x], axis=1)
+        else:
+            dp = _q._from_gibbs(x)
         if self.group == "SO3xR3":
             r1 = r + y
         else:
-            t = _so3._dexp_apply(x, y) if self.chart == "exp" else y + _q._rotate(dp, y)
+            if self.chart == "exp":
+                xy = _cross(x, y)
+                t = y + (0.5 * sh * sh)[:, None] * xy + _series.c3(phi)[:, None] * _cross(x, xy)
+            else:
+                t = y + _q._rotate(dp, y)
             r1 = r + _q._rotate(pk, t)
         p = _q._mul(pk, dp)
         return np.concatenate([r1, self.param._from_quat(p, rot)], axis=1), p

@@ -25,7 +25,7 @@ RIGID = {"RigidBodyEP": params.QUAT_WXYZ, "RigidBodyRotVecLG": params.ROTVEC,
 #: node types whose ODE2 coordinates are a vector space (q̇ = v)
 VECTOR = ("Point", "Point2D", "RigidBody2D", "GenericODE2", "Point3DSlope1", "Point3DSlope23",
           "Point2DSlope1", "PointGround")
-_EPS_GAMMA = 1e-6
+_EPS_GAMMA = 1e-5
 
 
 def _exudyn():
@@ -97,6 +97,7 @@ class ExudynModel(Model):
                              "finite; fix the node's initial velocities.")
         self._so3xr3 = {}
         self.n_eval = 0
+        self._detect_constant_mass()
 
     def _init_solver(self):
         """The evaluator: its own solver object, writing no files and no sensors."""
@@ -190,6 +191,43 @@ class ExudynModel(Model):
                 out[idx[3:]] = [da, db, dc]
         return out
 
+    def _Hplus_Hdot_V(self, q, V):
+        """H⁺ Ḣ V with H⁺ the left inverse of H (EP: 2G(p), which annihilates Ḣ V = -¼|ω|² p;
+        Rxyz: G(θ); identity elsewhere)."""
+        out = np.zeros(self.nv)
+        if "RigidBodyRxyz" in self._types:
+            hv = self.Hdot_V(q, V)
+            rq, wv = self._types["RigidBodyRxyz"]
+            th = q[rq]
+            c1, s1, c2, s2 = np.cos(th[:, 1]), np.sin(th[:, 1]), np.cos(th[:, 2]), np.sin(th[:, 2])
+            d = hv[rq]
+            out[wv] = np.stack([c1 * c2 * d[:, 0] + s2 * d[:, 1], -c1 * s2 * d[:, 0] + c2 * d[:, 1],
+                                s1 * d[:, 0] + d[:, 2]], axis=1)
+        return out
+
+    def _detect_constant_mass(self, rng=np.random.default_rng(7)):
+        """Cache M̄ when the twist mass matrix is the same at q0 and two other configurations
+        and the engine's M equals H⁺ᵀ M̄ H⁺ there (rigid bodies with the node at the centre
+        of mass); then Exudyn's mass matrix is never evaluated again."""
+        self._Mbar = None
+        S, mbs = self.solver, self.mbs
+        Ms = []
+        for k in range(3):
+            q = self.q0 if k == 0 else self._moved(self.q0, rng.normal(size=self.nv), 0.7)
+            self.sd.SetODE2Coordinates(q - self.ref)
+            S.ComputeMassMatrix(mbs)
+            M = np.array(S.GetSystemMassMatrix())
+            H = self.H(q)
+            Mb = H.T @ M @ H
+            Hp = np.linalg.pinv(H)
+            if np.abs(M - Hp.T @ Mb @ Hp).max() > 1e-12 * max(1.0, np.abs(M).max()):
+                break
+            Ms.append(Mb)
+        else:
+            if all(np.abs(m - Ms[0]).max() <= 1e-12 * max(1.0, np.abs(Ms[0]).max()) for m in Ms):
+                self._Mbar = 0.5 * (Ms[0] + Ms[0].T)
+        self.sd.SetODE2Coordinates(self.q0 - self.ref)
+
     # ------------------------------------------------------------------ engine access
     def _write(self, q, qd, t):
         exu, sd = self.exu, self.sd
@@ -210,19 +248,24 @@ class ExudynModel(Model):
         H = self.H(q)
         qd = H @ V
         self._write(q, qd, t)
-        S.ComputeMassMatrix(mbs)
-        M = np.array(S.GetSystemMassMatrix())
         S.ComputeODE2RHS(mbs)
         Q = np.array(S.GetSystemResidual())[:self.n2]
-        Mb = H.T @ M @ H
-        Qb = H.T @ (Q - M @ self.Hdot_V(q, V))
+        if self._Mbar is None:
+            S.ComputeMassMatrix(mbs)
+            M = np.array(S.GetSystemMassMatrix())
+            Mb = H.T @ M @ H
+            Qb = H.T @ (Q - M @ self.Hdot_V(q, V))
+        else:
+            # constant twist mass matrix M̄ and M = H⁺ᵀ M̄ H⁺: Hᵀ M Ḣ V = M̄ H⁺ Ḣ V
+            Mb = self._Mbar
+            Qb = H.T @ Q - Mb @ self._Hplus_Hdot_V(q, V)
         self.n_eval += 1
         if not self.n_constraints:
             return Mb, Qb, None, None
         A = self._Cq() @ H
         if need_gamma:
             gam = self._gamma(q, V)
-            self.sd.SetODE2Coordinates(q - self.ref)      # leave the evaluated state in the system
+            self._write(q, qd, t)                         # leave the evaluated state in the system
             return Mb, Qb, A, gam
         return Mb, Qb, A, None
 
@@ -245,9 +288,16 @@ class ExudynModel(Model):
         self.sd.SetODE2Coordinates(q - self.ref)
         return self._Cq() @ self.rates_from_twist(q, V)
 
+    def _AV_at(self, q, V):
+        """A(q) V from Exudyn's velocity-level constraint residual C_q(q) q̇_e (a vector:
+        no dense Jacobian transfer)."""
+        self._write(q, self.rates_from_twist(q, V), self.sd.GetTime())
+        self.solver.ComputeAlgebraicEquations(self.mbs, True)
+        return np.array(self.solver.GetSystemResidual())[self.solver.GetODE2size():][self.ae_keep]
+
     def _gamma(self, q, V):
-        """γ = d/dt (A(q) V) at fixed V, by central differences along the motion
-        (Exudyn does not provide the constraints' acceleration term)."""
+        """γ = d/dt (A(q) V) at fixed V (Exudyn does not provide it): central differences
+        of A V along the path q(s) = τ(q, sV), whose twist is V for all s."""
         eps = _EPS_GAMMA / max(1.0, float(np.abs(V).max()))
         return (self._AV_at(self._moved(q, V, eps), V) - self._AV_at(self._moved(q, V, -eps), V)) / (2 * eps)
 
@@ -259,6 +309,8 @@ class ExudynModel(Model):
         return solve_kkt(M, A, Q, -gam)[0]
 
     def mass_matrix(self, q):
+        if self._Mbar is not None:
+            return self._Mbar.copy()
         return self._evaluate(q, np.zeros(self.nv), self.sd.GetTime(), need_gamma=False)[0]
 
     def forces(self, q, V, t):
