@@ -1,0 +1,180 @@
+"""PinocchioModel: a Pinocchio model as an lgt_bridge model.
+
+q is Pinocchio's own configuration vector. Each free-flyer joint is a rigid body
+(position, then the quaternion in Pinocchio's ``x y z w`` order); its 6 entries of
+V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
+(v_lin body, ω body) with ṙ = R v_lin. Joints whose configuration space is a vector
+space (nq = nv: revolute, prismatic, translation) are vector-space blocks.
+f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
+"""
+import numpy as np
+
+from lgt_bridge import params
+from lgt_bridge.errors import InputError
+from lgt_bridge.groups import quaternion as _q
+from lgt_bridge.groups._vec import cross
+from lgt_bridge.model import Layout, Model, RigidBody
+
+#: joints integrated as vector spaces (q̇ = v)
+VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX", "JointModelPY",
+                 "JointModelPZ", "JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned",
+                 "JointModelTranslation", "JointModelHelicalX", "JointModelHelicalY", "JointModelHelicalZ")
+
+
+def _pin():
+    import pinocchio
+    return pinocchio
+
+
+class PinocchioModel(Model):
+    """A ``pinocchio.Model`` for :func:`lgt_bridge.simulate.simulate`.
+
+    tau: None (zero), a vector of size nv, or ``tau(t, q, v)`` (Pinocchio's q and v).
+    fext: None or ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector
+    (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame.
+    q0, v0: initial state in Pinocchio's own coordinates (default: neutral, zero).
+    """
+
+    def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None):
+        pin = self.pin = _pin()
+        if constraints:
+            raise InputError("PinocchioModel: RigidConstraintModel constraints are not supported yet; "
+                             "integrate unconstrained models, or use the engine-free scenes for "
+                             "constrained ones.")
+        self.model, self.data = model, model.createData()
+        bodies, vq, vv = [], [], []
+        self.roots = []
+        for j, jm in enumerate(model.joints):
+            if j == 0:
+                continue
+            name, iq, iv = jm.shortname(), jm.idx_q, jm.idx_v
+            if name == "JointModelFreeFlyer":
+                bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
+                                        tuple(range(iv, iv + 6)), model.names[j]))
+                self.roots.append((iq, iv))
+            elif name in VECTOR_JOINTS or (jm.nq == jm.nv and name not in ("JointModelSpherical",
+                                                                            "JointModelSphericalZYX",
+                                                                            "JointModelComposite")):
+                vq += list(range(iq, iq + jm.nq))
+                vv += list(range(iv, iv + jm.nv))
+            else:
+                raise InputError(f"Pinocchio joint {j} ({model.names[j]!r}) is a {name} (nq = {jm.nq}, "
+                                 f"nv = {jm.nv}); lgt_bridge supports free-flyers and joints whose "
+                                 f"configuration space is a vector space ({', '.join(VECTOR_JOINTS[:6])}, ...).")
+        self.layout = Layout(model.nq, model.nv, bodies, tuple(vq), tuple(vv))
+        self.nq, self.nv = model.nq, model.nv
+        self._riq = np.array([r[0] for r in self.roots], int)
+        self._riv = np.array([r[1] for r in self.roots], int)
+        self._tau = tau
+        if tau is not None and not callable(tau):
+            tau = np.asarray(tau, float)
+            if tau.shape != (self.nv,) or not np.isfinite(tau).all():
+                raise InputError(f"tau: expected a finite vector of size nv = {self.nv} or a callable "
+                                 f"tau(t, q, v), got shape {tau.shape}.")
+            self._tau = tau
+        self._fext = fext
+        q0 = pin.neutral(model) if q0 is None else np.asarray(q0, float)
+        v0 = np.zeros(self.nv) if v0 is None else np.asarray(v0, float)
+        if q0.shape != (self.nq,) or v0.shape != (self.nv,):
+            raise InputError(f"q0/v0: expected sizes nq = {self.nq}, nv = {self.nv}; got "
+                             f"{q0.shape}, {v0.shape}.")
+        for name, arr in (("q0", q0), ("v0", v0)):
+            if not np.isfinite(arr).all():
+                i = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise InputError(f"{name}: entry {i} is {arr[i]}; give a finite initial state.")
+        for b in bodies:
+            b.param.validate(q0[[*b.pos, *b.rot]], f"q0 of free-flyer {b.name!r}")
+        self.q0 = q0
+        self.V0 = self.twist_from_v(q0, v0)
+        # validate the inputs once now, so a wrong tau or fext fails before any step
+        self._torques(0.0, q0, v0)
+        if fext is not None:
+            self._forces(0.0, q0, v0)
+
+    # --- Pinocchio velocity (v_lin body, ω body) <-> model twist (ω body, ṙ inertial) ---------
+    def _quats(self, q):
+        p = q[self._riq[:, None] + np.arange(3, 7)]          # (k, 4) x y z w
+        return p[:, [3, 0, 1, 2]]
+
+    def v_from_twist(self, q, V):
+        v = V.copy()
+        if len(self.roots):
+            p = self._quats(q)
+            i = self._riv[:, None]
+            v[i + np.arange(3)] = _q._rotate(_q._conj(p), V[i + np.arange(3, 6)])
+            v[i + np.arange(3, 6)] = V[i + np.arange(3)]
+        return v
+
+    def twist_from_v(self, q, v):
+        V = np.array(v, float)
+        if len(self.roots):
+            p = self._quats(q)
+            i = self._riv[:, None]
+            V[i + np.arange(3)] = v[i + np.arange(3, 6)]
+            V[i + np.arange(3, 6)] = _q._rotate(p, v[i + np.arange(3)])
+        return V
+
+    # --- inputs -------------------------------------------------------------------------------
+    def _torques(self, t, q, v):
+        if self._tau is None:
+            return np.zeros(self.nv)
+        tau = np.asarray(self._tau(t, q, v) if callable(self._tau) else self._tau, float)
+        if tau.shape != (self.nv,):
+            raise InputError(f"tau(t, q, v) returned shape {tau.shape}; expected ({self.nv},).")
+        return tau
+
+    def _forces(self, t, q, v):
+        pin = self.pin
+        fs = self._fext(t, q, v)
+        if len(fs) != self.model.njoints:
+            raise InputError(f"fext(t, q, v) returned {len(fs)} forces; Pinocchio needs one per joint, "
+                             f"model.njoints = {self.model.njoints} (entry 0, the universe, is ignored). "
+                             "Pinocchio does not check this itself and would read garbage.")
+        out = pin.StdVec_Force()
+        for k, f in enumerate(fs):
+            if isinstance(f, pin.Force):
+                out.append(f)
+            else:
+                f = np.asarray(f, float)
+                if f.shape != (6,) or not np.isfinite(f).all():
+                    raise InputError(f"fext: force {k} must be a pinocchio.Force or a finite 6-vector "
+                                     f"(linear, angular), got {f!r}.")
+                out.append(pin.Force(f[:3], f[3:]))
+        return out
+
+    # --- model protocol ---------------------------------------------------------------------------
+    def f(self, q, V, t):
+        pin = self.pin
+        v = self.v_from_twist(q, V)
+        tau = self._torques(t, q, v)
+        if self._fext is None:
+            a = pin.aba(self.model, self.data, q, v, tau)
+        else:
+            a = pin.aba(self.model, self.data, q, v, tau, self._forces(t, q, v))
+        Vd = np.array(a)
+        if len(self.roots):
+            i = self._riv[:, None]
+            vl, w = v[i + np.arange(3)], v[i + np.arange(3, 6)]
+            Vd[i + np.arange(3)] = a[i + np.arange(3, 6)]
+            Vd[i + np.arange(3, 6)] = _q._rotate(self._quats(q), a[i + np.arange(3)] + cross(w, vl))
+        return Vd
+
+    def pin_state(self, q, V):
+        """(q, v) in Pinocchio's own coordinates, for pin.forwardKinematics, frames, viewers."""
+        return np.array(q, float), self.v_from_twist(np.asarray(q, float), np.asarray(V, float))
+
+    # --- diagnostics ------------------------------------------------------------------------------
+    def energy(self, q, V):
+        pin = self.pin
+        v = self.v_from_twist(q, V)
+        return pin.computeKineticEnergy(self.model, self.data, q, v) + pin.computePotentialEnergy(self.model, self.data, q)
+
+    def spatial_momentum(self, q, V):
+        """Total spatial momentum (linear, angular about the world origin) in the world frame."""
+        pin = self.pin
+        v = self.v_from_twist(q, V)
+        pin.forwardKinematics(self.model, self.data, q, v)
+        h = pin.Force.Zero()
+        for j in range(1, self.model.njoints):
+            h += self.data.oMi[j].act(self.model.inertias[j] * self.data.v[j])
+        return np.concatenate([h.linear, h.angular])

@@ -1,0 +1,18 @@
+"""Entry point of the Pinocchio adapter (group ``lgt_bridge.adapters``)."""
+
+
+class _PinocchioPlugin:
+    name = "pinocchio"
+
+    @staticmethod
+    def accepts(obj):
+        t = type(obj)
+        return t.__name__ == "Model" and t.__module__.startswith("pinocchio")
+
+    @staticmethod
+    def wrap(obj, **options):
+        from .model import PinocchioModel
+        return PinocchioModel(obj, **options)
+
+
+PLUGIN = _PinocchioPlugin()
