@@ -23,7 +23,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import exudyn as exu  # noqa: E402
 import exudyn_models as em  # noqa: E402
 
 from lgt_bridge import scenes  # noqa: E402

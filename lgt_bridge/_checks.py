@@ -112,3 +112,17 @@ def public(*specs):
         api.__wrapped__ = fn
         return api
     return wrap
+
+
+GROUP6_API = {name: (("X", (6,)),) for name in ("exp", "cay", "dexp", "dexp_inv", "dcay", "dcay_inv")}
+GROUP6_API.update({name: (("X", (6,)), ("V", (6,))) for name in
+                   ("dexp_apply", "dexp_inv_apply", "dcay_apply", "dcay_inv_apply")})
+GROUP6_API.update(log=(("C", (4, 4)),), cay_inv=(("C", (4, 4)),), inv=(("C", (4, 4)),),
+                  adjoint=(("C", (4, 4)),), mul=(("C1", (4, 4)), ("C2", (4, 4))))
+
+
+def export_group6(namespace):
+    """Define the public, checked functions of a 6-dimensional group module from its
+    internal ``_name`` functions (SE(3) and SO(3)xR³ share the API)."""
+    for name, specs in GROUP6_API.items():
+        namespace[name] = public(*specs)(namespace["_" + name])

@@ -23,7 +23,6 @@ from .groups._vec import norm as _norm
 from .errors import InputError
 from .groups import quaternion as _q
 from .groups import se3 as _se3
-from .groups import so3 as _so3
 from .groups import so3xr3 as _so3xr3
 
 GROUPS = ("SE3", "SO3xR3")
@@ -141,28 +140,22 @@ def local_rates(X, V, group="SE3", chart="exp"):
     return _checks.unbatch(lgt.rates(Xb, Vb), sx and sv)
 
 
-def _rotate_linear(q, V, param, inverse):
-    p = params.get(param)._to_quat(q[:, 3:])
-    if inverse:
-        p = _q._conj(p)
-    return np.concatenate([V[:, :3], _q._rotate(p, V[:, 3:])], axis=1)
+def _convert_twist(q, V, param, group, to_group):
+    par = params.get(param)
+    qb, sq = par.validate(q, "q")
+    Vb, _ = _checks.batch(V, (6,), "V")
+    if check_group(group) == "SO3xR3":
+        return _checks.unbatch(Vb.copy(), sq)
+    p = par._to_quat(qb[:, 3:])
+    p = _q._conj(p) if to_group else p
+    return _checks.unbatch(np.concatenate([Vb[:, :3], _q._rotate(p, Vb[:, 3:])], axis=1), sq)
 
 
 def to_group_twist(q, V, param="quat", group="SE3"):
     """Model twist (ω, ṙ) -> the group's twist: (ω, Rᵀṙ) on SE(3), unchanged on SO(3)xR³."""
-    par = params.get(param)
-    qb, sq = par.validate(q, "q")
-    Vb, _ = _checks.batch(V, (6,), "V")
-    if check_group(group) == "SO3xR3":
-        return _checks.unbatch(Vb.copy(), sq)
-    return _checks.unbatch(_rotate_linear(qb, Vb, par, inverse=True), sq)
+    return _convert_twist(q, V, param, group, to_group=True)
 
 
 def from_group_twist(q, V, param="quat", group="SE3"):
     """The group's twist -> model twist (ω, ṙ): ṙ = R u on SE(3)."""
-    par = params.get(param)
-    qb, sq = par.validate(q, "q")
-    Vb, _ = _checks.batch(V, (6,), "V")
-    if check_group(group) == "SO3xR3":
-        return _checks.unbatch(Vb.copy(), sq)
-    return _checks.unbatch(_rotate_linear(qb, Vb, par, inverse=False), sq)
+    return _convert_twist(q, V, param, group, to_group=False)

@@ -2,8 +2,8 @@
 import exudyn as exu
 import numpy as np
 from exudyn.utilities import (MarkerNodePosition, MassPoint, NodePoint, ObjectConnectorCartesianSpringDamper,
-                              ObjectGround, RigidBodyInertia, SensorNode, MarkerBodyRigid, LoadForceVector,
-                              MarkerBodyPosition, ObjectMassPoint)
+                              ObjectGround, RigidBodyInertia, MarkerBodyRigid, LoadForceVector,
+                              MarkerBodyPosition)
 
 EP = exu.NodeType.RotationEulerParameters
 ROTVEC = exu.NodeType.RotationRotationVector

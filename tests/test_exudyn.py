@@ -1,5 +1,4 @@
 """The Exudyn adapter and drop-in solver (skipped only when exudyn is not installed)."""
-import os
 import subprocess
 import sys
 from pathlib import Path

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 import scipy.linalg as sl
 from hypothesis import given
-from hypothesis import strategies as st
 
 from lgt_bridge import ChartDomainError
 from lgt_bridge.groups import quaternion as quat

@@ -2,7 +2,6 @@
 their kinematic maps against finite differences, and branch continuity."""
 import numpy as np
 import pytest
-from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy.spatial.transform import Rotation
@@ -10,7 +9,6 @@ from scipy.spatial.transform import Rotation
 from lgt_bridge import ChartDomainError, InputError, params
 from lgt_bridge.groups import so3
 
-from strategies import unit_quat, vec3
 
 angles = hnp.arrays(np.float64, 3, elements=st.floats(-7, 7))
 

@@ -4,7 +4,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from lgt_bridge import InputError, lgt, scenes, wrap  # noqa: E402
+from lgt_bridge import InputError, lgt, wrap  # noqa: E402
 from lgt_bridge.analytic import torque_free_omega  # noqa: E402
 from lgt_bridge.scenes import RigidBodySystem  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402

@@ -230,7 +230,7 @@ class ExudynModel(Model):
 
     # ------------------------------------------------------------------ engine access
     def _write(self, q, qd, t):
-        exu, sd = self.exu, self.sd
+        sd = self.sd
         sd.SetODE2Coordinates(q - self.ref)
         sd.SetODE2Coordinates_t(qd)
         sd.SetTime(t)

@@ -8,7 +8,6 @@ control needs between two Exudyn output steps.
 """
 import time
 
-import numpy as np
 
 from lgt_bridge.errors import InputError, StepError
 from lgt_bridge.integrators.base import StepFailed

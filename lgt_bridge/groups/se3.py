@@ -11,7 +11,7 @@
 import numpy as np
 
 from .. import _series
-from .._checks import public
+from .._checks import export_group6, public
 from . import so3
 from ._vec import EYE3, cross, dot, hat, matvec, norm
 
@@ -156,18 +156,4 @@ def _hat(X):
 
 
 hat6 = public(("X", (6,)))(_hat)
-exp = public(("X", (6,)))(_exp)
-log = public(("C", (4, 4)))(_log)
-cay = public(("X", (6,)))(_cay)
-cay_inv = public(("C", (4, 4)))(_cay_inv)
-dexp = public(("X", (6,)))(_dexp)
-dexp_inv = public(("X", (6,)))(_dexp_inv)
-dcay = public(("X", (6,)))(_dcay)
-dcay_inv = public(("X", (6,)))(_dcay_inv)
-dexp_apply = public(("X", (6,)), ("V", (6,)))(_dexp_apply)
-dexp_inv_apply = public(("X", (6,)), ("V", (6,)))(_dexp_inv_apply)
-dcay_apply = public(("X", (6,)), ("V", (6,)))(_dcay_apply)
-dcay_inv_apply = public(("X", (6,)), ("V", (6,)))(_dcay_inv_apply)
-mul = public(("C1", (4, 4)), ("C2", (4, 4)))(_mul)
-inv = public(("C", (4, 4)))(_inv)
-adjoint = public(("C", (4, 4)))(_adjoint)
+export_group6(globals())

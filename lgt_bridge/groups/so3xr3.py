@@ -7,7 +7,7 @@ a chart increment is therefore resolved in the inertial frame (ERRATA, rprime2).
 """
 import numpy as np
 
-from .._checks import public
+from .._checks import export_group6
 from . import so3
 from .se3 import _assemble, _blocks
 
@@ -75,18 +75,4 @@ def _adjoint(C):
     return _diag(C[:, :3, :3])
 
 
-exp = public(("X", (6,)))(_exp)
-log = public(("C", (4, 4)))(_log)
-cay = public(("X", (6,)))(_cay)
-cay_inv = public(("C", (4, 4)))(_cay_inv)
-dexp = public(("X", (6,)))(_dexp)
-dexp_inv = public(("X", (6,)))(_dexp_inv)
-dcay = public(("X", (6,)))(_dcay)
-dcay_inv = public(("X", (6,)))(_dcay_inv)
-dexp_apply = public(("X", (6,)), ("V", (6,)))(_dexp_apply)
-dexp_inv_apply = public(("X", (6,)), ("V", (6,)))(_dexp_inv_apply)
-dcay_apply = public(("X", (6,)), ("V", (6,)))(_dcay_apply)
-dcay_inv_apply = public(("X", (6,)), ("V", (6,)))(_dcay_inv_apply)
-mul = public(("C1", (4, 4)), ("C2", (4, 4)))(_mul)
-inv = public(("C", (4, 4)))(_inv)
-adjoint = public(("C", (4, 4)))(_adjoint)
+export_group6(globals())
