@@ -133,7 +133,9 @@ class Model:
 
     @property
     def has_mass_matrix(self):
-        return type(self).mass_matrix is not Model.mass_matrix
+        """True when the model gives both M(q) and Q(q, V, t) (the index-3 residual form)."""
+        return (type(self).mass_matrix is not Model.mass_matrix
+                and type(self).forces is not Model.forces)
 
 
 def solve_kkt(M, A, rhs_v, rhs_c):

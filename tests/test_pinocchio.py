@@ -156,3 +156,89 @@ def test_external_force_and_torque_inputs():
     r = simulate(pm, (0, 0.5), method="rkmk4", dt=1e-3)
     # no rotation (v0 = 0): the force stays along world z, r = ½ f t² / m
     assert np.allclose(r.q[-1][:3], [0, 0, 0.125], atol=1e-12)
+
+
+def _pinned(p=np.array([0.5, 0.2, 0.0]), w=np.array([0.3, 2.0, -0.5])):
+    model = free_body_model()
+    jid = model.getJointId("root")
+    cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, jid, pin.SE3(np.eye(3), p), pin.LOCAL)
+    cm.joint2_placement = pin.SE3(np.eye(3), p.copy())        # the world point where the body point is at q0
+    v0 = np.concatenate([-np.cross(w, p), w])                  # consistent: the pinned point is at rest
+    return PinocchioModel(model, v0=v0, constraints=[cm])
+
+
+def test_pinned_point_drift_se3_vs_so3xr3_and_projection():
+    """A body point pinned by a 3-D constraint, rkmk4 at dt = 1e-2 for 10 s. Without
+    projection the SE(3) step keeps the pivot (the velocity constraint is linear with
+    constant coefficients in the body twist, and exp of such a twist is a rotation about
+    the pivot); SO(3)xR³ lets it drift at the method's order. Projection holds both."""
+    pm = _pinned()
+    drift = {}
+    for group in ("SE3", "SO3xR3"):
+        r = simulate(pm, (0, 10), method="rkmk4", group=group, dt=1e-2, project=False)
+        drift[group] = max(np.abs(pm.constraints(q)).max() for q in r.q)
+        rp = simulate(pm, (0, 10), method="rkmk4", group=group, dt=1e-2)
+        assert rp.stats["constraint_after_projection"] <= 1e-10
+        assert max(np.abs(pm.constraints(q)).max() for q in rp.q) <= 1e-10
+    assert drift["SE3"] < 1e-11
+    assert drift["SO3xR3"] > 1e-9 and drift["SO3xR3"] > 1e3 * drift["SE3"]
+
+
+def test_constraint_jacobian_matches_pinocchio_where_satisfied(rng):
+    model = pin.buildSampleModelHumanoidRandom()
+    j = model.njoints - 1
+    d = model.createData()
+    q0 = pin.neutral(model)
+    pin.forwardKinematics(model, d, q0)
+    pl = pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.05]))
+    cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j, pl, pin.LOCAL)
+    cm.joint2_placement = d.oMi[j] * pl
+    pm = PinocchioModel(model, constraints=[cm])
+    V = rng.normal(size=pm.nv)
+    v = pm.v_from_twist(q0, V)
+    cms = pin.StdVec_RigidConstraintModel()
+    cms.append(cm)
+    cds = pin.StdVec_RigidConstraintData()
+    cds.append(cm.createData())
+    dd = model.createData()
+    pin.initConstraintDynamics(model, dd, cms, cds)
+    pin.constraintDynamics(model, dd, q0, v, np.zeros(model.nv), cms, cds, pin.ProximalSettings(1e-12, 1e-12, 20))
+    Jc = pin.getConstraintsJacobian(model, dd, cms, cds)      # LOCAL frame of the contact
+    Rc = (dd.oMi[j] * pl).rotation
+    AV = pm.constraint_jacobian(q0) @ V
+    assert np.abs(AV[:3] - Rc @ (Jc[:3] @ v)).max() < 1e-8 * max(1, np.abs(AV).max())
+    assert np.abs(AV[3:] - Jc[3:] @ v).max() < 1e-8 * max(1, np.abs(AV).max())
+
+
+def test_constraint_not_satisfied_at_q0_is_rejected():
+    model = free_body_model()
+    cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, 1, pin.SE3(np.eye(3), np.array([0.5, 0, 0])),
+                                  pin.LOCAL)
+    with pytest.raises(InputError, match="do not coincide"):
+        PinocchioModel(model, constraints=[cm])
+
+
+def test_mass_matrix_and_forces_reproduce_aba(rng):
+    """M̄⁻¹ Q̄ (CRBA/RNEA in twist coordinates) must equal the ABA-based f."""
+    model = free_body_model(gravity=True)
+    pm = PinocchioModel(model, fext=lambda t, q, v: [pin.Force.Zero(),
+                                                     pin.Force(np.array([0.1, 0.2, 0.3]), np.array([0.01, -0.02, 0.05]))])
+    h = pin.buildSampleModelHumanoidRandom()
+    ph = PinocchioModel(h, q0=pin.randomConfiguration(h, -np.ones(h.nq), np.ones(h.nq)), v0=rng.normal(size=h.nv))
+    for m in (pm, ph):
+        for _ in range(3):
+            q = m._moved(m.q0, rng.normal(size=m.nv) * 0.5)
+            V = rng.normal(size=m.nv)
+            assert np.abs(np.linalg.solve(m.mass_matrix(q), m.forces(q, V, 0.3)) - m.f(q, V, 0.3)).max() < 1e-11
+
+
+def test_genalpha_on_the_pinned_body():
+    pm = _pinned()
+    T = 1.0
+    ref_run = simulate(pm, (0, T), method="dopri5", rtol=1e-11, atol=1e-11, t_eval=[T])
+    errs = []
+    for dt in (2e-3, 1e-3):
+        r = simulate(pm, (0, T), method="genalpha", dt=dt, t_eval=[T])
+        assert r.success and r.stats["constraint_residual"] < 1e-12
+        errs.append(np.abs(r.q[-1] - ref_run.q[-1]).max())
+    assert 3.3 < errs[0] / errs[1] < 4.8                           # second order

@@ -9,6 +9,7 @@ f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 """
 import numpy as np
 
+from lgt_bridge import lgt as _lgt
 from lgt_bridge import params
 from lgt_bridge.errors import InputError
 from lgt_bridge.groups import quaternion as _q
@@ -37,10 +38,6 @@ class PinocchioModel(Model):
 
     def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None):
         pin = self.pin = _pin()
-        if constraints:
-            raise InputError("PinocchioModel: RigidConstraintModel constraints are not supported yet; "
-                             "integrate unconstrained models, or use the engine-free scenes for "
-                             "constrained ones.")
         self.model, self.data = model, model.createData()
         bodies, vq, vv = [], [], []
         self.roots = []
@@ -86,6 +83,8 @@ class PinocchioModel(Model):
             b.param.validate(q0[[*b.pos, *b.rot]], f"q0 of free-flyer {b.name!r}")
         self.q0 = q0
         self.V0 = self.twist_from_v(q0, v0)
+        self._move = _lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
+        self._setup_constraints(constraints or [], fext)
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
         if fext is not None:
@@ -142,12 +141,113 @@ class PinocchioModel(Model):
                 out.append(pin.Force(f[:3], f[3:]))
         return out
 
+    # --- constraints ------------------------------------------------------------------------------
+    def _setup_constraints(self, constraints, fext):
+        """RigidConstraintModels (3-D/6-D contacts, loop closures): f from Pinocchio's
+        constraintDynamics; g(q) = placement difference of the two constraint frames in the
+        world (6-D: and the rotation vector between them); A = dg/dV by central differences
+        along each twist direction through τ (used by the projection after each step)."""
+        pin = self.pin
+        self.cms = pin.StdVec_RigidConstraintModel()
+        self.cds = pin.StdVec_RigidConstraintData()
+        for k, cm in enumerate(constraints):
+            if not isinstance(cm, pin.RigidConstraintModel):
+                raise InputError(f"constraints[{k}] is a {type(cm).__name__}; pass "
+                                 "pinocchio.RigidConstraintModel objects.")
+            if cm.type not in (pin.ContactType.CONTACT_3D, pin.ContactType.CONTACT_6D):
+                raise InputError(f"constraints[{k}]: contact type {cm.type} is not supported (3D or 6D).")
+            self.cms.append(cm)
+            self.cds.append(cm.createData())
+        self.n_constraints = int(sum(cm.residualSize() for cm in self.cms))
+        if not self.n_constraints:
+            return
+        if fext is not None:
+            raise InputError("fext together with constraints is not supported (Pinocchio's "
+                             "constraintDynamics takes no external forces); express the loads as tau.")
+        pin.initConstraintDynamics(self.model, self.data, self.cms, self.cds)
+        self.prox = pin.ProximalSettings(1e-12, 1e-12, 50)
+        g0 = self.constraints(self.q0)
+        if np.abs(g0).max() > 1e-6:
+            k = int(np.argmax(np.abs(g0) > 1e-6))
+            raise InputError(f"constraint residual component {k} is {g0[k]:.3g} at q0: the constraint "
+                             "frames do not coincide; set joint2_placement to where joint1's frame is "
+                             "at q0 (or start from a configuration that satisfies the constraints).")
+
+    def constraints(self, q):
+        if not self.n_constraints:
+            return np.zeros(0)
+        pin = self.pin
+        pin.forwardKinematics(self.model, self.data, q)
+        out = []
+        for cm in self.cms:
+            M1 = self.data.oMi[cm.joint1_id] * cm.joint1_placement
+            M2 = self.data.oMi[cm.joint2_id] * cm.joint2_placement
+            out.append(M1.translation - M2.translation)
+            if cm.type == pin.ContactType.CONTACT_6D:
+                out.append(pin.log3(M2.rotation.T @ M1.rotation))
+        return np.concatenate(out)
+
+    def _moved(self, q, d):
+        out = q.copy()
+        for k, (iq, iv) in enumerate(self.roots):
+            out[iq:iq + 7] = self._move.tau(q[iq:iq + 7][None], d[iv:iv + 6][None])[0]
+        vq = list(self.layout.vector_q)
+        out[vq] = q[vq] + d[list(self.layout.vector_v)]
+        return out
+
+    def constraint_jacobian(self, q, eps=1e-6):
+        A = np.zeros((self.n_constraints, self.nv))
+        for k in range(self.nv):
+            e = np.zeros(self.nv)
+            e[k] = eps
+            A[:, k] = (self.constraints(self._moved(q, e)) - self.constraints(self._moved(q, -e))) / (2 * eps)
+        return A
+
+    def _T(self, q):
+        """v = T(q) V (Pinocchio velocity from the model twist)."""
+        T = np.eye(self.nv)
+        if len(self.roots):
+            R = _q._to_matrix(self._quats(q))
+            for k, (_, iv) in enumerate(self.roots):
+                T[iv:iv + 6, iv:iv + 6] = 0.0
+                T[iv:iv + 3, iv + 3:iv + 6] = R[k].T
+                T[iv + 3:iv + 6, iv:iv + 3] = np.eye(3)
+        return T
+
+    def mass_matrix(self, q):
+        """M̄ = Tᵀ M T in twist coordinates (Pinocchio's CRBA, symmetrized)."""
+        M = self.pin.crba(self.model, self.data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        T = self._T(q)
+        return T.T @ M @ T
+
+    def forces(self, q, V, t):
+        """Q̄ with M̄ V̇ = Q̄ (+ constraint forces): Tᵀ (τ - rnea(q, v, 0, fext) - M Ṫ V), where
+        v = T V and Ṫ V = (-ω × v_lin, 0) on each free-flyer (d/dt of Rᵀ ṙ at fixed ṙ)."""
+        pin = self.pin
+        v = self.v_from_twist(q, V)
+        tau = self._torques(t, q, v)
+        z = np.zeros(self.nv)
+        if self._fext is None:
+            b = pin.rnea(self.model, self.data, q, v, z)
+        else:
+            b = pin.rnea(self.model, self.data, q, v, z, self._forces(t, q, v))
+        TdV = np.zeros(self.nv)
+        if len(self.roots):
+            i = self._riv[:, None]
+            TdV[i + np.arange(3)] = -cross(v[i + np.arange(3, 6)], v[i + np.arange(3)])
+        M = pin.crba(self.model, self.data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        return self._T(q).T @ (tau - b - M @ TdV)
+
     # --- model protocol ---------------------------------------------------------------------------
     def f(self, q, V, t):
         pin = self.pin
         v = self.v_from_twist(q, V)
         tau = self._torques(t, q, v)
-        if self._fext is None:
+        if self.n_constraints:
+            a = pin.constraintDynamics(self.model, self.data, q, v, tau, self.cms, self.cds, self.prox)
+        elif self._fext is None:
             a = pin.aba(self.model, self.data, q, v, tau)
         else:
             a = pin.aba(self.model, self.data, q, v, tau, self._forces(t, q, v))
