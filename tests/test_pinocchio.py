@@ -242,3 +242,20 @@ def test_genalpha_on_the_pinned_body():
         assert r.success and r.stats["constraint_residual"] < 1e-12
         errs.append(np.abs(r.q[-1] - ref_run.q[-1]).max())
     assert 3.3 < errs[0] / errs[1] < 4.8                           # second order
+
+
+def test_fixed_base_and_several_free_flyers():
+    m = pin.buildSampleModelManipulator()                     # no free-flyer: all vector-space joints
+    pm = PinocchioModel(m, v0=np.full(m.nv, 0.3))
+    r = simulate(pm, (0, 0.5), method="dopri5", rtol=1e-9, atol=1e-9)
+    E = [pm.energy(q, V) for q, V in zip(r.q, r.V)]
+    assert r.success and not pm.layout.bodies and np.ptp(E) / abs(E[0]) < 1e-8
+    m2 = pin.Model()
+    for k in range(2):
+        j = m2.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), f"ff{k}")
+        m2.appendBodyToJoint(j, pin.Inertia(1.0 + k, np.zeros(3), np.diag([1.0, 2 + k, 3 + k])), pin.SE3.Identity())
+    m2.gravity.linear[:] = 0.0
+    pm2 = PinocchioModel(m2, v0=np.array([0.1, 0, 0, 0.3, 1, 0.2, 0, 0.2, 0, -0.5, 0.1, 1.5]))
+    r2 = simulate(pm2, (0, 2), method="dopri5", rtol=1e-10, atol=1e-10)
+    h = np.array([pm2.spatial_momentum(q, V) for q, V in zip(r2.q, r2.V)])
+    assert r2.success and len(pm2.layout.bodies) == 2 and np.abs(h - h[0]).max() < 1e-8
