@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import exudyn_models as em  # noqa: E402
 
@@ -29,6 +30,8 @@ from lgt_bridge import scenes  # noqa: E402
 from lgt_bridge.groups import so3  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_exudyn import ExudynModel  # noqa: E402
+
+from _workprecision import wall_at_error  # noqa: E402
 
 
 class Timer:
@@ -88,16 +91,6 @@ def bridge(make, T, method, group, chart, **kw):
     return r, wall, timer.inside, model
 
 
-def at_error(rows, target=1e-6):
-    """Wall time at `target` error by log-log interpolation along a family's curve."""
-    pts = sorted((r["error"], r["wall_s"]) for r in rows if r["error"] > 0 and np.isfinite(r["error"]))
-    for (e1, w1), (e2, w2) in zip(pts, pts[1:]):
-        if e1 <= target <= e2:
-            f = (np.log(target) - np.log(e1)) / (np.log(e2) - np.log(e1))
-            return float(np.exp(np.log(w1) + f * (np.log(w2) - np.log(w1))))
-    return None
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
@@ -150,16 +143,17 @@ def main(argv=None):
         fams = sorted({r["family"] for r in rows if r["scene"] == name})
         best = {}
         for f in fams:
-            w = at_error([r for r in rows if r["scene"] == name and r["family"] == f])
+            w, exact = wall_at_error([r for r in rows if r["scene"] == name and r["family"] == f], 1e-6)
             if w is not None:
-                best[f] = w
+                best[f] = (w, exact)
         nat = {f: w for f, w in best.items() if f.startswith("Exudyn")}
         br = {f: w for f, w in best.items() if f.startswith("bridge")}
         line = f"{name}: wall time at error 1e-6 — "
         if nat and br:
-            fn, wn = min(nat.items(), key=lambda kv: kv[1])
-            fb, wb = min(br.items(), key=lambda kv: kv[1])
-            line += f"best native {fn} {wn:.3f} s, best bridge {fb} {wb:.3f} s, ratio native/bridge {wn / wb:.2f}"
+            fn, (wn, xn) = min(nat.items(), key=lambda kv: kv[1][0])
+            fb, (wb, xb) = min(br.items(), key=lambda kv: kv[1][0])
+            line += (f"best native {fn} {'' if xn else '≤ '}{wn:.3f} s, best bridge {fb} {'' if xb else '≤ '}"
+                     f"{wb:.3f} s, ratio native/bridge {wn / wb:.2f} (≤: cheapest run below 1e-6, not bracketed)")
         else:
             line += f"not bracketed by the runs (native: {nat}, bridge: {br})"
         summary.append(line)

@@ -24,6 +24,8 @@ from scipy.spatial.transform import Rotation
 from lgt_bridge import simulate
 from lgt_pinocchio import PinocchioModel
 
+from _workprecision import wall_at_error
+
 
 def root_R(q):
     return Rotation.from_quat(q[3:7] / np.linalg.norm(q[3:7])).as_matrix()    # x y z w
@@ -94,18 +96,6 @@ def pose_error(q, qref):
     return ang + (float(other.max()) if other.size else 0.0)
 
 
-def at_error(rows, target):
-    """(wall time at `target` error, exact?): log-log interpolation where a family's runs
-    bracket the target; otherwise the cheapest run at or below it (an upper bound)."""
-    pts = sorted((r["error"], r["wall_s"]) for r in rows if r["error"] > 0)
-    for (e1, w1), (e2, w2) in zip(pts, pts[1:]):
-        if e1 <= target <= e2:
-            f = (np.log(target) - np.log(e1)) / (np.log(e2) - np.log(e1))
-            return float(np.exp(np.log(w1) + f * (np.log(w2) - np.log(w1)))), True
-    below = [w for e, w in pts if e <= target]
-    return (min(below), False) if below else (None, False)
-
-
 def free_body():
     m = pin.Model()
     j = m.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
@@ -171,7 +161,7 @@ def main(argv=None):
                         lambda tol=tol: bridge("dopri5", group, chart, rtol=tol, atol=tol))
         sub = [r for r in rows if r["scene"] == name]
         fams = sorted({r["family"] for r in sub})
-        w = {f: at_error([r for r in sub if r["family"] == f], 1e-8) for f in fams}
+        w = {f: wall_at_error([r for r in sub if r["family"] == f], 1e-8) for f in fams}
         base = {f: x for f, x in w.items() if x[0] and not f.startswith("bridge")}
         br = {f: x for f, x in w.items() if x[0] and f.startswith("bridge")}
         ov = [r["overhead"] for r in sub if r["family"].startswith("bridge")]
