@@ -23,6 +23,7 @@ from .groups._vec import norm as _norm
 from .errors import InputError
 from .groups import quaternion as _q
 from .groups import se3 as _se3
+from .groups import so3 as _so3
 from .groups import so3xr3 as _so3xr3
 
 GROUPS = ("SE3", "SO3xR3")
@@ -108,6 +109,31 @@ class LGT:
     def twist(self, X, Xdot):
         """V = dψ_{-X}(Ẋ) (paper eq. dpsi), the inverse of :meth:`rates`."""
         return self._dpsi(-X, Xdot)
+
+
+class RotationLGT:
+    """τ and the local kinematics of a rotation-only body (a spherical joint): the
+    rotation part of :class:`LGT`, with the increment x in the chart of SO(3)."""
+
+    def __init__(self, param, chart="exp"):
+        self.param = params.get(param)
+        self.chart = check_chart(chart)
+        self._dinv = _so3._dexp_inv_apply if self.chart == "exp" else _so3._dcay_inv_apply
+        self._d = _so3._dexp_apply if self.chart == "exp" else _so3._dcay_apply
+
+    def base(self, rot):
+        return None, rot, self.param._to_quat(rot)
+
+    def tau_pose(self, base, x):
+        _, rot, pk = base
+        p = _q._mul(pk, _chart_quat(self.chart, x))
+        return self.param._from_quat(p, rot), p
+
+    def rates(self, x, w):
+        return self._dinv(-x, w)
+
+    def twist(self, x, xdot):
+        return self._d(-x, xdot)
 
 
 def _prepare(q, X, param, group, chart):

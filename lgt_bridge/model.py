@@ -24,20 +24,34 @@ from .errors import InputError
 
 @dataclass(frozen=True)
 class RigidBody:
-    """Where one rigid body lives in q and V."""
+    """Where one rigid body lives in q and V. With ``pos = ()`` it is a rotation-only
+    body (a spherical joint): its twist is just ω (3 indices)."""
 
     param: _params.Parameterization
-    pos: tuple          # 3 indices into q
+    pos: tuple          # 3 indices into q, or () for a rotation-only body
     rot: tuple          # ν - 3 indices into q
-    twist: tuple        # 6 indices into V: (ω, ṙ)
+    twist: tuple        # 6 indices into V: (ω, ṙ); 3 (ω) for a rotation-only body
     name: str = ""
 
     def __post_init__(self):
         object.__setattr__(self, "param", _params.get(self.param))
-        if len(self.pos) != 3 or len(self.rot) != self.param.nrot or len(self.twist) != 6:
+        ok = len(self.rot) == self.param.nrot and (
+            (len(self.pos) == 3 and len(self.twist) == 6) or (len(self.pos) == 0 and len(self.twist) == 3))
+        if not ok:
             raise InputError(f"body {self.name!r}: {self.param.name} needs 3 position, "
-                             f"{self.param.nrot} rotation and 6 twist indices, got "
+                             f"{self.param.nrot} rotation and 6 twist indices (or no position and 3 "
+                             f"twist indices for a rotation-only body), got "
                              f"{len(self.pos)}, {len(self.rot)}, {len(self.twist)}.")
+
+    @property
+    def rotation_only(self):
+        return not self.pos
+
+    def validate(self, q, name):
+        """Check this body's entries of q (shape, finiteness, unit quaternion)."""
+        if self.rotation_only:
+            return self.param._rot(q[list(self.rot)], name)
+        return self.param.validate(q[[*self.pos, *self.rot]], name)
 
 
 @dataclass

@@ -78,7 +78,7 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
             raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                              "give a finite initial state.")
     for k, b in enumerate(lay.bodies):
-        b.param.validate(q0[[*b.pos, *b.rot]], f"q0 of body {k}" + (f" ({b.name})" if b.name else ""))
+        b.validate(q0, f"q0 of body {k}" + (f" ({b.name})" if b.name else ""))
     if t_eval is not None:
         t_eval = np.asarray(t_eval, float).ravel()
         if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):

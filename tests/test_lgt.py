@@ -166,3 +166,19 @@ def test_cayley_tau_at_half_turn_has_no_singularity_but_inverse_raises():
     assert abs(abs(out[4]) - 1) < 1e-15
     with pytest.raises(ChartDomainError):
         se3.cay_inv(se3.exp(np.array([np.pi, 0, 0, 0, 0, 0])))
+
+
+@pytest.mark.parametrize("param", PARAMS, ids=lambda p: p.name)
+@pytest.mark.parametrize("chart", lgt.CHARTS)
+def test_rotation_only_lgt_is_the_rotation_part(param, chart, rng):
+    """Rotation-only bodies (spherical joints): τ and rates equal the rotation part of
+    the SO(3)xR³ pairing (whose rotation is independent of the translation)."""
+    full, rot = lgt.LGT(param, "SO3xR3", chart), lgt.RotationLGT(param, chart)
+    Q = np.stack([random_q(param, rng) for _ in range(10)])
+    X = rng.normal(size=(10, 6)) * 0.7
+    W = rng.normal(size=(10, 6))
+    rows, p = rot.tau_pose(rot.base(Q[:, 3:]), X[:, :3])
+    ref_rows, ref_p = full.tau_pose(full.base(Q), X)
+    assert np.allclose(rows, ref_rows[:, 3:], rtol=0, atol=1e-14) and np.allclose(p, ref_p, rtol=0, atol=1e-15)
+    assert np.allclose(rot.rates(X[:, :3], W[:, :3]), full.rates(X, W)[:, :3], rtol=0, atol=1e-14)
+    assert np.allclose(rot.twist(X[:, :3], rot.rates(X[:, :3], W[:, :3])), W[:, :3], rtol=0, atol=1e-12)

@@ -1,6 +1,7 @@
 """The Pinocchio adapter (skipped only when pin is not installed)."""
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 pin = pytest.importorskip("pinocchio")
 
@@ -143,8 +144,8 @@ def test_bad_input():
     with pytest.raises(InputError, match="tau"):
         PinocchioModel(model, tau=np.zeros(5))
     h = pin.Model()
-    h.addJoint(0, pin.JointModelSpherical(), pin.SE3.Identity(), "ball")
-    with pytest.raises(InputError, match="JointModelSpherical"):
+    h.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "planar")
+    with pytest.raises(InputError, match="JointModelPlanar"):
         PinocchioModel(h)
 
 
@@ -259,3 +260,57 @@ def test_fixed_base_and_several_free_flyers():
     r2 = simulate(pm2, (0, 2), method="dopri5", rtol=1e-10, atol=1e-10)
     h = np.array([pm2.spatial_momentum(q, V) for q, V in zip(r2.q, r2.V)])
     assert r2.success and len(pm2.layout.bodies) == 2 and np.abs(h - h[0]).max() < 1e-8
+
+
+def _ball_chain():
+    m = pin.Model()
+    r = m.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
+    m.appendBodyToJoint(r, pin.Inertia(2.0, np.array([0, 0, 0.1]), np.diag([1.0, 1.5, 2.0])), pin.SE3.Identity())
+    b = m.addJoint(r, pin.JointModelSpherical(), pin.SE3(np.eye(3), np.array([0.3, 0, 0])), "ball")
+    m.appendBodyToJoint(b, pin.Inertia(0.5, np.array([0.2, 0, 0]), np.diag([0.1, 0.2, 0.25])), pin.SE3.Identity())
+    c = m.addJoint(b, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.4, 0, 0])), "hinge")
+    m.appendBodyToJoint(c, pin.Inertia(0.3, np.array([0.15, 0, 0]), np.diag([0.02, 0.05, 0.05])), pin.SE3.Identity())
+    return m
+
+
+def _plain_reference(model, q0, v0, T):
+    """Renormalized DOP853 on Pinocchio's (q, v): q̇ = (R v_lin, ½ p⊗(0, ω)) for the root,
+    ½ p⊗(0, ω) for the ball (x y z w order), v for the hinge; no lgt_bridge code."""
+    data = model.createData()
+
+    def qd_quat(p_xyzw, w):
+        p = np.array([p_xyzw[3], *p_xyzw[:3]])
+        d = 0.5 * ref.qmul(p, np.concatenate([[0.0], w]))
+        return np.array([d[1], d[2], d[3], d[0]])
+
+    def rhs(t, y):
+        q, v = y[:model.nq].copy(), y[model.nq:]
+        q[3:7] /= np.linalg.norm(q[3:7])
+        q[7:11] /= np.linalg.norm(q[7:11])
+        R = R_xyzw(q)
+        qd = np.concatenate([R @ v[:3], qd_quat(q[3:7], v[3:6]), qd_quat(q[7:11], v[6:9]), v[9:]])
+        return np.concatenate([qd, pin.aba(model, data, q, v, np.zeros(model.nv))])
+
+    s = solve_ivp(rhs, (0, T), np.concatenate([q0, v0]), method="DOP853", rtol=1e-12, atol=1e-12)
+    q = s.y[:model.nq, -1].copy()
+    q[3:7] /= np.linalg.norm(q[3:7])
+    q[7:11] /= np.linalg.norm(q[7:11])
+    return q
+
+
+@pytest.mark.parametrize("group,chart", [("SE3", "exp"), ("SO3xR3", "cay")])
+def test_spherical_joint_as_rotation_only_body(group, chart):
+    model = _ball_chain()
+    rng = np.random.default_rng(1)
+    q0 = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+    v0 = rng.normal(size=model.nv)
+    pm = PinocchioModel(model, q0=q0, v0=v0)
+    assert [b.rotation_only for b in pm.layout.bodies] == [False, True]
+    T = 1.0
+    r = simulate(pm, (0, T), method="dopri5", group=group, chart=chart, rtol=1e-11, atol=1e-11, t_eval=[0, T])
+    qref = _plain_reference(model, q0, v0, T)
+    assert ref.angle(R_xyzw(r.q[-1]), R_xyzw(qref)) < 1e-8                     # root rotation
+    assert np.abs(r.q[-1][:3] - qref[:3]).max() < 1e-8                         # root position
+    assert ref.angle(R_xyzw(np.r_[0, 0, 0, r.q[-1][7:11]]), R_xyzw(np.r_[0, 0, 0, qref[7:11]])) < 1e-8
+    assert abs(r.q[-1][11] - qref[11]) < 1e-8                                   # hinge
+    assert abs(np.linalg.norm(r.q[-1][7:11]) - 1) < 1e-14

@@ -3,8 +3,10 @@
 q is Pinocchio's own configuration vector. Each free-flyer joint is a rigid body
 (position, then the quaternion in Pinocchio's ``x y z w`` order); its 6 entries of
 V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
-(v_lin body, ω body) with ṙ = R v_lin. Joints whose configuration space is a vector
-space (nq = nv: revolute, prismatic, translation) are vector-space blocks.
+(v_lin body, ω body) with ṙ = R v_lin. A spherical joint is a rotation-only body
+(its quaternion, and ω, which is Pinocchio's joint velocity as is). Joints whose
+configuration space is a vector space (nq = nv: revolute, prismatic, translation)
+are vector-space blocks.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 """
 import numpy as np
@@ -40,7 +42,7 @@ class PinocchioModel(Model):
         pin = self.pin = _pin()
         self.model, self.data = model, model.createData()
         bodies, vq, vv = [], [], []
-        self.roots = []
+        self.roots, self.balls = [], []
         for j, jm in enumerate(model.joints):
             if j == 0:
                 continue
@@ -49,15 +51,20 @@ class PinocchioModel(Model):
                 bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
                                         tuple(range(iv, iv + 6)), model.names[j]))
                 self.roots.append((iq, iv))
-            elif name in VECTOR_JOINTS or (jm.nq == jm.nv and name not in ("JointModelSpherical",
-                                                                            "JointModelSphericalZYX",
+            elif name == "JointModelSpherical":
+                # rotation-only body: q = x y z w quaternion, v = ω in the joint frame (= body ω)
+                bodies.append(RigidBody(params.QUAT_XYZW, (), tuple(range(iq, iq + 4)),
+                                        tuple(range(iv, iv + 3)), model.names[j]))
+                self.balls.append((iq, iv))
+            elif name in VECTOR_JOINTS or (jm.nq == jm.nv and name not in ("JointModelSphericalZYX",
                                                                             "JointModelComposite")):
                 vq += list(range(iq, iq + jm.nq))
                 vv += list(range(iv, iv + jm.nv))
             else:
                 raise InputError(f"Pinocchio joint {j} ({model.names[j]!r}) is a {name} (nq = {jm.nq}, "
-                                 f"nv = {jm.nv}); lgt_bridge supports free-flyers and joints whose "
-                                 f"configuration space is a vector space ({', '.join(VECTOR_JOINTS[:6])}, ...).")
+                                 f"nv = {jm.nv}); lgt_bridge supports free-flyers, spherical joints and "
+                                 f"joints whose configuration space is a vector space "
+                                 f"({', '.join(VECTOR_JOINTS[:6])}, ...).")
         self.layout = Layout(model.nq, model.nv, bodies, tuple(vq), tuple(vv))
         self.nq, self.nv = model.nq, model.nv
         self._riq = np.array([r[0] for r in self.roots], int)
@@ -80,10 +87,11 @@ class PinocchioModel(Model):
                 i = int(np.flatnonzero(~np.isfinite(arr))[0])
                 raise InputError(f"{name}: entry {i} is {arr[i]}; give a finite initial state.")
         for b in bodies:
-            b.param.validate(q0[[*b.pos, *b.rot]], f"q0 of free-flyer {b.name!r}")
+            b.validate(q0, f"q0 of joint {b.name!r}")
         self.q0 = q0
         self.V0 = self.twist_from_v(q0, v0)
         self._move = _lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
+        self._move_ball = _lgt.RotationLGT(params.QUAT_XYZW, "exp")
         self._setup_constraints(constraints or [], fext)
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
@@ -189,8 +197,11 @@ class PinocchioModel(Model):
 
     def _moved(self, q, d):
         out = q.copy()
-        for k, (iq, iv) in enumerate(self.roots):
+        for iq, iv in self.roots:
             out[iq:iq + 7] = self._move.tau(q[iq:iq + 7][None], d[iv:iv + 6][None])[0]
+        for iq, iv in self.balls:
+            mb = self._move_ball
+            out[iq:iq + 4] = mb.tau_pose(mb.base(q[iq:iq + 4][None]), d[iv:iv + 3][None])[0][0]
         vq = list(self.layout.vector_q)
         out[vq] = q[vq] + d[list(self.layout.vector_v)]
         return out

@@ -18,18 +18,27 @@ from ..groups._vec import cross
 
 
 class BodySet:
-    """Bodies that share (parameterization, group, chart): one batched τ call."""
+    """Bodies that share (parameterization, group, chart): one batched τ call.
+    Rotation-only bodies (spherical joints) form sets of their own (3 local coordinates)."""
 
-    def __init__(self, param, group, chart, body_ids, layout):
-        self.lgt = _lgt.LGT(param, group, chart)
-        self.se3 = group == "SE3"
-        self.cay = chart == "cay"
+    def __init__(self, param, group, chart, body_ids, layout, xoff):
         bodies = [layout.bodies[i] for i in body_ids]
+        self.rot_only = bodies[0].rotation_only
+        self.lgt = _lgt.RotationLGT(param, chart) if self.rot_only else _lgt.LGT(param, group, chart)
+        self.se3 = group == "SE3" and not self.rot_only
+        self.cay = chart == "cay"
         self.ids = np.array(body_ids)
         self.qidx = np.array([[*b.pos, *b.rot] for b in bodies])
         self.vidx = np.array([b.twist for b in bodies])
         self.wang, self.wlin = self.vidx[:, :3], self.vidx[:, 3:]
-        self.xidx = 6 * self.ids[:, None] + np.arange(6)
+        n = 3 if self.rot_only else 6
+        self.xidx = xoff[self.ids][:, None] + np.arange(n)
+
+    def base(self, q_k, quats=None):
+        rows = q_k[self.qidx]
+        if self.rot_only:
+            return self.lgt.base(rows) if quats is None else (None, rows, quats)
+        return self.lgt.base(rows) if quats is None else (rows[:, :3], rows[:, 3:], quats)
 
 
 def per_body(option, n, name, check):
@@ -52,14 +61,16 @@ class LocalProblem:
         nb = lay.nbodies
         self.groups = per_body(group, nb, "group", _lgt.check_group)
         self.charts = per_body(chart, nb, "chart", _lgt.check_chart)
+        sizes = np.array([3 if b.rotation_only else 6 for b in lay.bodies], int)
+        xoff = np.concatenate([[0], np.cumsum(sizes)])
         keys = {}
         for i, b in enumerate(lay.bodies):
-            keys.setdefault((b.param.name, self.groups[i], self.charts[i]), []).append(i)
-        self.sets = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay) for (_, g, c), ids in keys.items()]
+            keys.setdefault((b.param.name, self.groups[i], self.charts[i], b.rotation_only), []).append(i)
+        self.sets = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay, xoff) for (_, g, c, _), ids in keys.items()]
         self.vq = np.array(lay.vector_q, int)
         self.vv = np.array(lay.vector_v, int)
-        self.nX = 6 * nb + len(self.vq)
-        self.vx = 6 * nb + np.arange(len(self.vq))
+        self.nX = int(xoff[-1]) + len(self.vq)
+        self.vx = int(xoff[-1]) + np.arange(len(self.vq))
         self.nv = lay.nv
         self.n_f = 0
         self.cay_rows = np.concatenate([s.xidx[:, :3] for s in self.sets if s.cay] or [np.zeros((0, 3), int)])
@@ -68,16 +79,14 @@ class LocalProblem:
         self.chart_scale = np.ones(self.nX)
         for s in self.sets:
             if s.cay:
-                self.chart_scale[s.xidx[:, :6] if s.se3 else s.xidx[:, :3]] = 0.5
+                self.chart_scale[s.xidx if s.se3 else s.xidx[:, :3]] = 0.5
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
         """Prepare the step from q_k (``quats``: the bodies' quaternions, when known)."""
         self.q_k = q_k
-        if quats is None:
-            self.bases = [s.lgt.base(q_k[s.qidx]) for s in self.sets]
-        else:
-            self.bases = [(q_k[s.qidx[:, :3]], q_k[s.qidx[:, 3:]], p) for s, p in zip(self.sets, quats)]
+        quats = quats if quats is not None else [None] * len(self.sets)
+        self.bases = [s.base(q_k, p) for s, p in zip(self.sets, quats)]
 
     @property
     def start_quats(self):
