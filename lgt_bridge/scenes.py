@@ -124,6 +124,26 @@ class RigidBodySystem(Model):
             torque = torque + T
         return np.concatenate([torque, force], axis=1).ravel()
 
+    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos):
+        """M c_acc + C_t c_vel for generalized-α: the exact gyroscopic damping
+        ∂(ω × Jω)/∂ω = ω~J - (Jω)~ and the springs' damping; stiffness terms (gravity moment,
+        springs, joint geometry) are left to Newton's iterations (modified Newton)."""
+        W = V.reshape(self.nb, 6)
+        w = W[:, :3]
+        Jw = np.einsum("nij,nj->ni", self.J, w)
+        Ct = np.zeros((self.nb, 6, 6))
+        Ct[:, :3, :3] = hat(w) @ self.J - hat(Jw)
+        out = self.mass_matrix(q) * c_acc
+        idx = np.arange(self.nb)
+        blocks = out.reshape(self.nb, 6, self.nb, 6)
+        blocks[idx, :, idx, :] += c_vel * Ct
+        out = blocks.reshape(6 * self.nb, 6 * self.nb)
+        for (i, si, j, sj, k, d) in self.springs:
+            for b in (i, j):
+                if b >= 0:
+                    out[6 * b + 3:6 * b + 6, 6 * b + 3:6 * b + 6] += c_vel * d * np.eye(3)
+        return out
+
     def f(self, q, V, t):
         Q = self.forces(q, V, t)
         if not self.n_constraints:

@@ -10,8 +10,10 @@ Cardona 2015), on the local coordinates of the bridge:
 cay(ΔX/2), which agrees with exp(ΔX) to O(|ΔX|³) and keeps second order.
 
 solved by Newton in (Ẇ_{k+1}, λ) with the constraint rows scaled by 1/(h²β).
-The iteration matrix is a finite-difference Jacobian in Ẇ (λ enters linearly
-through Aᵀ), reused across iterations and steps while Newton converges.
+The iteration matrix comes from the model (``iteration_matrix(q, V, t, c_acc, c_vel,
+c_pos)`` ≈ M c_acc + C_t c_vel + K_t c_pos) when every body is on SO(3)xR³, else it is a
+finite-difference Jacobian in Ẇ (λ enters linearly through Aᵀ); either is reused across
+iterations and steps while Newton converges.
 Models without a mass matrix use the residual V̇ - f(q, V, t) (unconstrained only).
 """
 import numpy as np
@@ -49,6 +51,10 @@ class GenAlpha(Stepper):
                              "from the model (index-3 residual M V̇ - Q + Aᵀλ).")
         self._lu = None
         self._lu_h = None
+        # the model's own iteration matrix where the unknowns are its own increments and
+        # accelerations (every body on SO(3)xR³; rotation-only bodies too)
+        self._model_jacobian = (self.use_M and callable(getattr(m, "iteration_matrix", None))
+                                and not any(s.se3 for s in problem.sets))
         self.Wd = None
         self._prev = None
         self.n_jacobians = 0
@@ -87,6 +93,8 @@ class GenAlpha(Stepper):
         return Vd1 - m.f(q1, V1, t1), None, q1, V1
 
     def _jacobian(self, Wd1, lam, t1, h, r0, A):
+        if self._model_jacobian:
+            return self._jacobian_from_model(Wd1, lam, t1, h, A)
         n = len(Wd1)
         J = np.zeros((n + self.nc, n + self.nc))
         # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
@@ -98,6 +106,27 @@ class GenAlpha(Stepper):
             J[:, j] = (self._residual(Wp, lam, t1, h)[0] - r0) / e
         if self.nc:
             J[:n, n:] = A.T
+        self.n_jacobians += 1
+        self._lu = sla.lu_factor(J)
+        self._lu_h = h
+
+    def _jacobian_from_model(self, Wd1, lam, t1, h, A):
+        """Iteration matrix from the model: ∂R_dyn/∂V̇ = M c_acc + C_t c_vel + K_t c_pos with
+        c_acc = 1, c_vel = hγ(1-α_f)/(1-α_m), c_pos = h²β(1-α_f)/(1-α_m) (T(ΔX) ≈ I), and the
+        constraint rows A (1-α_f)/(1-α_m) (the g/(h²β) scaling cancels c_pos)."""
+        m = self.prob.model
+        _, W1, dX = self._state(Wd1, h)
+        q1, quats = self.prob.configuration(dX)
+        V1 = self.prob.model_velocity(W1, quats)
+        k = (1 - self.af) / (1 - self.am)
+        Jd = m.iteration_matrix(q1, V1, t1, 1.0, h * self.gamma * k, h * h * self.beta * k)
+        n = len(Wd1)
+        J = np.zeros((n + self.nc, n + self.nc))
+        J[:n, :n] = Jd
+        if self.nc:
+            A = m.constraint_jacobian(q1) if A is None else A
+            J[:n, n:] = A.T
+            J[n:, :n] = A * k
         self.n_jacobians += 1
         self._lu = sla.lu_factor(J)
         self._lu_h = h
