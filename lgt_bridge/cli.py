@@ -51,7 +51,27 @@ def main(argv=None):
     r.add_argument("--chart", default="exp", choices=["exp", "cay"])
     r.add_argument("--rtol", type=float, default=None)
     r.add_argument("--atol", type=float, default=None)
+    b = sub.add_parser("bench", help="work-precision sweep of method x group x chart x tolerance/step "
+                       "on a scene, against a tight reference; writes JSON and Markdown")
+    b.add_argument("scene", help="built-in scene (heavy_top, heavy_top_pivot, free_body, chain) or "
+                   "path/to/file.py:function returning (model, t_end)")
+    b.add_argument("--methods", default="rkmk4,dopri5")
+    b.add_argument("--groups", default="SE3,SO3xR3")
+    b.add_argument("--charts", default="exp,cay")
+    b.add_argument("--tols", default="1e-5,1e-7,1e-9", help="tolerances of adaptive methods")
+    b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods")
+    b.add_argument("--out", default="bench-results")
+    b.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     a = ap.parse_args(argv)
+    if a.cmd == "bench":
+        from . import bench
+        floats = lambda s: [float(x) for x in s.split(",") if x]   # noqa: E731
+        words = lambda s: [x for x in s.split(",") if x]           # noqa: E731
+        ref, rows = bench.sweep(a.scene, words(a.methods), words(a.groups), words(a.charts),
+                                floats(a.tols), floats(a.dts), workers=a.workers)
+        path = bench.write_report(a.out, a.scene, ref, rows)
+        print(path.read_text())
+        return 0
     if a.cmd == "run":
         return _run_script(a)
     if a.cmd in (None, "demo"):
