@@ -58,6 +58,11 @@ def load_scene(spec):
 
 def pose_error(model, q, q_ref):
     """Largest body rotation angle + largest position error (+ vector coordinates)."""
+    return sum(pose_errors(model, q, q_ref))
+
+
+def pose_errors(model, q, q_ref):
+    """(largest body rotation angle, largest position / vector-coordinate error)."""
     e_rot = e_pos = 0.0
     for b in model.layout.bodies:
         if b.rotation_only:
@@ -73,7 +78,7 @@ def pose_error(model, q, q_ref):
     vq = list(model.layout.vector_q)
     if vq:
         e_pos = max(e_pos, float(np.abs(q[vq] - q_ref[vq]).max()))
-    return e_rot + e_pos
+    return e_rot, e_pos
 
 
 def _one(spec, method, group, chart, setting, q_ref, V_ref):

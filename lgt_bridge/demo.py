@@ -5,7 +5,7 @@ import time
 import numpy as np
 
 from . import scenes
-from .groups import so3
+from .bench import pose_errors
 from .simulate import simulate
 
 RUNS = [
@@ -24,17 +24,6 @@ RUNS = [
 ]
 
 
-def pose_error(model, q, q_ref):
-    """Largest rotation angle and position error over the bodies."""
-    err_R, err_r = 0.0, 0.0
-    for b in model.layout.bodies:
-        R = b.param.alpha(q[[*b.pos, *b.rot]])[:3, :3]
-        Rr = b.param.alpha(q_ref[[*b.pos, *b.rot]])[:3, :3]
-        err_R = max(err_R, float(np.linalg.norm(so3.log(R.T @ Rr))))
-        err_r = max(err_r, float(np.abs(q[list(b.pos)] - q_ref[list(b.pos)]).max()))
-    return err_R, err_r
-
-
 def run(out, T=0.1, param="quat", constrained=True, runs=RUNS):
     model = scenes.heavy_top(constrained, param=param)
     form = "spherical joint, frame at the centre of mass" if constrained else "frame at the pivot"
@@ -51,7 +40,7 @@ def run(out, T=0.1, param="quat", constrained=True, runs=RUNS):
     rows = []
     for method, group, chart, kw in runs:
         r = simulate(model, (0, T), method=method, group=group, chart=chart, t_eval=[0, T], **kw)
-        eR, er = pose_error(model, r.q[-1], ref.q[-1])
+        eR, er = pose_errors(model, r.q[-1], ref.q[-1])
         g = float(np.abs(model.constraints(r.q[-1])).max()) if model.n_constraints else 0.0
         setting = ", ".join(f"{k}={v:g}" for k, v in kw.items() if k != "atol")
         st = r.stats
