@@ -172,14 +172,15 @@ class RigidBodySystem(Model):
             return A
         _, R = self._poses(q)
         rows = np.arange(3 * nj).reshape(nj, 3)
-        Bi = -R[self._ji] @ hat(self._si)
-        for k in range(nj):
-            i, j = self._ji[k], self._jj[k]
-            A[rows[k, :, None], 6 * i + np.arange(3)] = Bi[k]
-            A[rows[k], 6 * i + 3 + np.arange(3)] = 1.0
-            if j >= 0:
-                A[rows[k, :, None], 6 * j + np.arange(3)] = R[j] @ hat(self._sj[k:k + 1])[0]
-                A[rows[k], 6 * j + 3 + np.arange(3)] = -1.0
+        ci = 6 * self._ji[:, None] + np.arange(3)                       # ω columns of body i
+        A[rows[:, :, None], ci[:, None, :]] = -R[self._ji] @ hat(self._si)
+        A[rows, ci + 3] = 1.0
+        body = ~self._ground
+        if body.any():
+            jj = self._jj[body]
+            cj = 6 * jj[:, None] + np.arange(3)
+            A[rows[body][:, :, None], cj[:, None, :]] = R[jj] @ hat(self._sj[body])
+            A[rows[body], cj + 3] = -1.0
         return A
 
     def constraint_gamma(self, q, V):

@@ -347,3 +347,21 @@ def test_genalpha_uses_the_models_iteration_matrix(monkeypatch):
     assert np.abs(a.q[-1] - b.q[-1]).max() < 1e-10
     assert a.stats["n_f"] < b.stats["n_f"]                         # no FD columns
     assert a.stats["constraint_residual"] < 1e-10
+
+
+def test_scene_constraint_jacobian_and_gamma_against_finite_differences(rng):
+    """ġ = A(q) V and γ = d/dt(A V) at fixed V, both along q(s) = τ(q, sV) on SO(3)xR³
+    (the model twist's own increments)."""
+    from lgt_bridge.integrators.local import LocalProblem
+    m = scenes.chain(4)
+    prob = LocalProblem(m, "SO3xR3", "exp")
+    prob.start(m.q0)
+    q, _ = prob.configuration(prob.to_local(rng.normal(size=m.layout.nv) * 0.3))
+    V = rng.normal(size=m.layout.nv)
+    prob.start(q)
+    at = lambda s: prob.configuration(prob.to_local(s * V))[0]          # noqa: E731
+    h = 1e-6
+    gdot = (m.constraints(at(h)) - m.constraints(at(-h))) / (2 * h)
+    assert np.abs(m.constraint_jacobian(q) @ V - gdot).max() < 1e-8
+    gam = (m.constraint_jacobian(at(h)) @ V - m.constraint_jacobian(at(-h)) @ V) / (2 * h)
+    assert np.abs(m.constraint_gamma(q, V) - gam).max() < 1e-6

@@ -12,11 +12,6 @@ import numpy as np
 from .local import LocalProblem
 
 
-def twist_to_local(prob, d):
-    """Map a vector in V's layout to X's layout (bodies: same 6 numbers; vector part: rates)."""
-    return prob.to_local(d)
-
-
 class Projector:
 
     def __init__(self, model, tol=1e-12, max_iter=10):
@@ -42,7 +37,7 @@ class Projector:
                 break
             d, _, _ = self._correction(q, g)
             self.prob.start(q)
-            q, _ = self.prob.configuration(twist_to_local(self.prob, -d))
+            q, _ = self.prob.configuration(self.prob.to_local(-d))
             g = m.constraints(q)
             self.iterations += 1
         A = m.constraint_jacobian(q)

@@ -21,7 +21,6 @@ import scipy.linalg as sla
 
 from ..errors import InputError
 from .base import StepFailed, Stepper
-from .constraints import twist_to_local
 
 
 def coefficients(rho_inf):
@@ -72,7 +71,7 @@ class GenAlpha(Stepper):
     def _state(self, Wd1, h):
         a1 = ((1 - self.af) * Wd1 + self.af * self.Wd - self.am * self.a) / (1 - self.am)
         W1 = self.W + h * (1 - self.gamma) * self.a + h * self.gamma * a1
-        dX = twist_to_local(self.prob, h * self.W + h * h * (0.5 - self.beta) * self.a + h * h * self.beta * a1)
+        dX = self.prob.to_local(h * self.W + h * h * (0.5 - self.beta) * self.a + h * h * self.beta * a1)
         return a1, W1, dX * self.prob.chart_scale
 
     def _residual(self, Wd1, lam, t1, h):
