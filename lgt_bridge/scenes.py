@@ -283,6 +283,24 @@ def chain(n=5, *, param="quat", length=1.0, mass=1.0, spin=2.0):
                            param=param, joints=joints, names=[f"link{k}" for k in range(n)])
 
 
+def top_and_free_bodies(n_free=3, *, param="quat", seed=0):
+    """The heavy top on its spherical joint (frame at the centre of mass) plus
+    ``n_free`` unjointed bodies falling and tumbling beside it: a scene whose bodies
+    need different groups when the joint is not projected."""
+    rng = np.random.default_rng(seed)
+    param = _params.get(param)
+    top = heavy_top(True, param=param)
+    J = [np.diag(np.sort(rng.uniform(0.5, 3.0, 3))) for _ in range(n_free)]
+    p = rng.normal(size=(n_free, 4))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    rot = _rot_coords(param, _q._to_matrix(p))
+    q_free = np.concatenate([rng.normal(size=(n_free, 3)) + [3.0, 0.0, 0.0], rot], axis=1).ravel()
+    V_free = np.concatenate([rng.normal(size=(n_free, 3)) * 5.0, rng.normal(size=(n_free, 3))], axis=1).ravel()
+    return RigidBodySystem([top.m[0], *np.ones(n_free)], [top.J[0], *J], np.concatenate([top.q0, q_free]),
+                           np.concatenate([top.V0, V_free]), param=param, joints=top.joints,
+                           names=["top"] + [f"free{k}" for k in range(n_free)])
+
+
 def free_bodies(n=100, *, param="quat", seed=0):
     """n independent torque-free bodies with random inertias, attitudes and spins (for scaling)."""
     rng = np.random.default_rng(seed)

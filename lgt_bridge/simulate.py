@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import auto as _auto
 from .errors import ChartDomainError, InputError, StepError
 from .integrators import METHODS
 from .integrators.base import StepFailed
@@ -173,13 +174,20 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5" (adaptive: rtol/atol,
     dt = first step), "scipy:<Name>" (scipy solver inside macro steps of length dt),
     "genalpha" (fixed dt, index-3 constraints, numerical damping ``rho_inf``).
-    group: "SE3" or "SO3xR3"; chart: "exp" or "cay" (one value or one per body).
+    group: "SE3", "SO3xR3" or "auto"; chart: "exp", "cay" or "auto" (one value or one
+    per body). "auto" picks per body what the model's structure needs
+    (:mod:`lgt_bridge.auto`); ``stats["auto"]`` says what it chose and why, and
+    ``result.group``/``result.chart`` hold the resolved per-body lists.
     Constrained models with explicit methods are projected onto g = 0 and A V = 0
     after every step (``project=False`` turns this off).
     t_eval: output times (steps land on them); default: every step.
     """
     t0, t1, q0, V0, t_eval = _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval,
                                            max_steps)
+    choice = None
+    if _auto.wants_auto(group, chart):
+        choice = _auto.choose(model, group, chart, method=method, project=project)
+        group, chart = choice.groups, choice.charts
     stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=(t0, t1))
     wall0 = time.perf_counter()
@@ -214,7 +222,10 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
         success, message = False, str(exc)
         model.write_back(stepper.q, stepper.V, drv.t)
     bar(drv.t, drv.n_steps, final=True)
-    return _result(ts, qs, Vs, success, message, stepper, drv.n_steps, wall0, method, group, chart, model)
+    res = _result(ts, qs, Vs, success, message, stepper, drv.n_steps, wall0, method, group, chart, model)
+    if choice is not None:
+        res.stats["auto"] = choice.as_dicts()
+    return res
 
 
 def _result(ts, qs, Vs, success, message, stepper, n_steps, wall0, method, group, chart, model):
