@@ -334,6 +334,9 @@ def test_t_eval_and_write_back():
     assert np.array_equal(r.t, ts)
     assert m.writes[-1][0] == pytest.approx(1.0)
     assert r.stats["n_steps"] == len(m.writes)
+    # after a step shortened to land on an output time, fixed steps go back to dt:
+    # steps of 0.1 up to 0.013 (1), 0.5 (5), 0.77 (3), 1.0 (3) = 12
+    assert r.stats["n_steps"] == 12
 
 
 def test_genalpha_uses_the_models_iteration_matrix(monkeypatch):

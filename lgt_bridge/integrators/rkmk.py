@@ -80,7 +80,7 @@ class FixedRK(ExplicitRK):
         if not (np.isfinite(X1).all() and np.isfinite(W1).all()):
             raise StepFailed(f"non-finite state at t = {t + h:.9g}; reduce dt.")
         self.finish(t + h, *self.end_state(X1, W1))
-        return True, h
+        return True, None      # fixed step: the driver goes back to dt after a shortened landing step
 
 
 class AdaptiveRK(ExplicitRK):
