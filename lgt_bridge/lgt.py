@@ -46,11 +46,6 @@ def check_chart(chart):
     return chart
 
 
-def _chart_quat(chart, x):
-    """Rotation part of ψ(X) as a unit quaternion (scalar first)."""
-    return _q._from_rotvec(x) if chart == "exp" else _q._from_gibbs(x)
-
-
 class LGT:
     """τ and the local kinematics for one (parameterization, group, chart).
 
@@ -84,12 +79,12 @@ class LGT:
         r, rot, pk = base
         x, y = X[:, :3], X[:, 3:]
         if self.chart == "exp":
-            # φ, sinc(φ/2), cos(φ/2) serve both the quaternion and dexp_x y (β = sinc²(φ/2))
+            # φ and sinc(φ/2) serve both the quaternion and dexp_x y (β = sinc²(φ/2))
             phi = _norm(x)
             sh = _series.sinc(0.5 * phi)
-            dp = np.concatenate([np.cos(0.5 * phi)[:, None], (0.5 * sh)[:, None] * x], axis=1)
+            d = _q._rotvec_minus_one(x, phi, sh)
         else:
-            dp = _q._from_gibbs(x)
+            d = _q._gibbs_minus_one(x)
         if self.group == "SO3xR3":
             r1 = r + y
         else:
@@ -97,9 +92,11 @@ class LGT:
                 xy = _cross(x, y)
                 t = y + (0.5 * sh * sh)[:, None] * xy + _series.c3(phi)[:, None] * _cross(x, xy)
             else:
+                dp = d.copy()
+                dp[:, 0] += 1.0
                 t = y + _q._rotate(dp, y)
             r1 = r + _q._rotate(pk, t)
-        p = _q._mul(pk, dp)
+        p = _q._mul_near_identity(pk, d)
         return np.concatenate([r1, self.param._from_quat(p, rot)], axis=1), p
 
     def rates(self, X, V):
@@ -126,7 +123,8 @@ class RotationLGT:
 
     def tau_pose(self, base, x):
         _, rot, pk = base
-        p = _q._mul(pk, _chart_quat(self.chart, x))
+        d = _q._rotvec_minus_one(x) if self.chart == "exp" else _q._gibbs_minus_one(x)
+        p = _q._mul_near_identity(pk, d)
         return self.param._from_quat(p, rot), p
 
     def rates(self, x, w):
