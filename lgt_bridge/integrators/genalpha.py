@@ -105,7 +105,14 @@ class GenAlpha(Stepper):
             J[:, j] = (self._residual(Wp, lam, t1, h)[0] - r0) / e
         if self.nc:
             J[:n, n:] = A.T
+        self._factor(J, t1, h)
+
+    def _factor(self, J, t1, h):
         self.n_jacobians += 1
+        if not np.isfinite(J).all():
+            self._lu = None
+            raise StepFailed(f"genalpha: Newton diverged at t = {t1:.9g} (h = {h:.3g}): the iteration "
+                             "matrix is not finite; reduce dt.")
         self._lu = sla.lu_factor(J)
         self._lu_h = h
 
@@ -126,9 +133,7 @@ class GenAlpha(Stepper):
             A = m.constraint_jacobian(q1) if A is None else A
             J[:n, n:] = A.T
             J[n:, :n] = A * k
-        self.n_jacobians += 1
-        self._lu = sla.lu_factor(J)
-        self._lu_h = h
+        self._factor(J, t1, h)
 
     def attempt(self, t, h):
         """Modified Newton: the stored iteration matrix is refreshed at the current
@@ -147,10 +152,11 @@ class GenAlpha(Stepper):
         if self._lu is None or self._lu_h != h:
             r, A, _, _ = self._residual(Wd1, lam, t1, h)
             self._jacobian(Wd1, lam, t1, h, r, A)
-        prev, converged = None, False
+        prev, converged, finite = None, False, True
         for it in range(self.nmax):
             r, A, q1, V1 = self._residual(Wd1, lam, t1, h)
             if not np.isfinite(r).all():
+                finite = False
                 break
             dz = -sla.lu_solve(self._lu, r)
             Wd1 = Wd1 + dz[:n]
@@ -170,8 +176,8 @@ class GenAlpha(Stepper):
                 prev = size
         if not converged:
             self._lu = None
-            raise StepFailed(f"genalpha: Newton did not converge at t = {t1:.9g} (h = {h:.3g}) "
-                             f"in {self.nmax} iterations; reduce dt.")
+            why = "diverged (non-finite residual)" if not finite else f"did not converge in {self.nmax} iterations"
+            raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.")
         a1, W1, dX = self._state(Wd1, h)
         q1, quats = self.prob.configuration(dX)
         V1 = self.prob.model_velocity(W1, quats)

@@ -67,6 +67,26 @@ class _CayleyLimit(Exception):
 
 
 class FixedRK(ExplicitRK):
+    """Fixed steps. A step beyond the stability limit of the stiffest mode shows as a
+    velocity change that grows geometrically from step to step (by |R(hλ)| > 1);
+    GROWTH-fold growth over RUN consecutive steps is reported as instability (a
+    resolved physical growth at rate λ grows by e^{λh} ≈ 1 + λh per step)."""
+
+    GROWTH, RUN = 2.0, 5
+    _dW, _grow = None, 0
+
+    def _check_growth(self, t, h, W1):
+        dW = float(np.linalg.norm(W1 - self.W))
+        if self._dW is not None and dW > self.GROWTH * self._dW and dW > 1e-300:
+            self._grow += 1
+        else:
+            self._grow = 0
+        self._dW = dW
+        if self._grow >= self.RUN:
+            raise StepFailed(f"unstable at t = {t + h:.9g}: the velocity change per step grew more than "
+                             f"{self.GROWTH:g}-fold in each of {self.RUN} consecutive steps (last |ΔV| = "
+                             f"{dW:.3g}); dt = {h:.3g} is beyond this method's stability limit for the "
+                             "stiffest mode. Reduce dt, or use genalpha or an adaptive method.")
 
     def attempt(self, t, h):
         try:
@@ -79,6 +99,7 @@ class FixedRK(ExplicitRK):
                 "adaptive method.", ChartDomainError) from None
         if not (np.isfinite(X1).all() and np.isfinite(W1).all()):
             raise StepFailed(f"non-finite state at t = {t + h:.9g}; reduce dt.")
+        self._check_growth(t, h, W1)
         self.finish(t + h, *self.end_state(X1, W1))
         return True, None      # fixed step: the driver goes back to dt after a shortened landing step
 
