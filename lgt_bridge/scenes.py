@@ -125,9 +125,10 @@ class RigidBodySystem(Model):
         return np.concatenate([torque, force], axis=1).ravel()
 
     def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos):
-        """M c_acc + C_t c_vel for generalized-α: the exact gyroscopic damping
-        ∂(ω × Jω)/∂ω = ω~J - (Jω)~ and the springs' damping; stiffness terms (gravity moment,
-        springs, joint geometry) are left to Newton's iterations (modified Newton)."""
+        """M c_acc + C_t c_vel + K_t c_pos for generalized-α: the exact gyroscopic damping
+        ∂(ω × Jω)/∂ω = ω~J - (Jω)~ and the springs' damping and stiffness (a stiff spring
+        needs its K_t for Newton to converge); the gravity moment and the joint geometry
+        are left to Newton's iterations (modified Newton)."""
         W = V.reshape(self.nb, 6)
         w = W[:, :3]
         Jw = np.einsum("nij,nj->ni", self.J, w)
@@ -138,10 +139,26 @@ class RigidBodySystem(Model):
         blocks = out.reshape(self.nb, 6, self.nb, 6)
         blocks[idx, :, idx, :] += c_vel * Ct
         out = blocks.reshape(6 * self.nb, 6 * self.nb)
+        if self.springs:
+            out += self._spring_matrix(q, c_vel, c_pos)
+        return out
+
+    def _spring_matrix(self, q, c_vel, c_pos):
+        """Springs' damping c_vel·d DᵀD and stiffness c_pos·(k DᵀD - s̃ (RᵀF)~) in the
+        local increments (δθ body, δr inertial) of SO(3)xR³: with D_i = [-R_i s̃_i, I]
+        the point's variation δp_i = D_i δz_i, and δ(Rᵀ F) = (RᵀF)~ δθ."""
+        r, R = self._poses(q)
+        out = np.zeros((6 * self.nb, 6 * self.nb))
         for (i, si, j, sj, k, d) in self.springs:
-            for b in (i, j):
-                if b >= 0:
-                    out[6 * b + 3:6 * b + 6, 6 * b + 3:6 * b + 6] += c_vel * d * np.eye(3)
+            ends = [(i, np.asarray(si, float), 1.0)] + ([(j, np.asarray(sj, float), -1.0)] if j >= 0 else [])
+            D = {b: np.hstack([-R[b] @ hat(s[None])[0], np.eye(3)]) for b, s, _ in ends}
+            pi = r[i] + R[i] @ ends[0][1]
+            pj = r[j] + R[j] @ sj if j >= 0 else np.asarray(sj, float)
+            F = k * (pj - pi)                                   # elastic force on body i
+            for a, sa, ga in ends:
+                for b, _, gb in ends:
+                    out[6 * a:6 * a + 6, 6 * b:6 * b + 6] += ga * gb * (c_pos * k + c_vel * d) * D[a].T @ D[b]
+                out[6 * a:6 * a + 3, 6 * a:6 * a + 3] -= c_pos * ga * hat(sa[None])[0] @ hat((R[a].T @ F)[None])[0]
         return out
 
     def f(self, q, V, t):
@@ -290,7 +307,7 @@ def top_and_free_bodies(n_free=3, *, param="quat", seed=0):
     rng = np.random.default_rng(seed)
     param = _params.get(param)
     top = heavy_top(True, param=param)
-    J = [np.diag(np.sort(rng.uniform(0.5, 3.0, 3))) for _ in range(n_free)]
+    J = [principal_inertia(rng) for _ in range(n_free)]
     p = rng.normal(size=(n_free, 4))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
     rot = _rot_coords(param, _q._to_matrix(p))
@@ -301,11 +318,18 @@ def top_and_free_bodies(n_free=3, *, param="quat", seed=0):
                            names=["top"] + [f"free{k}" for k in range(n_free)])
 
 
+def principal_inertia(rng):
+    """Random principal moments of a physical body: (b+c, a+c, a+b) for random second
+    moments a, b, c > 0 of its mass distribution, so the triangle inequality holds."""
+    a, b, c = rng.uniform(0.25, 1.5, 3)
+    return np.diag(np.sort([b + c, a + c, a + b]))
+
+
 def free_bodies(n=100, *, param="quat", seed=0):
     """n independent torque-free bodies with random inertias, attitudes and spins (for scaling)."""
     rng = np.random.default_rng(seed)
     param = _params.get(param)
-    J = [np.diag(np.sort(rng.uniform(0.5, 3.0, 3))) for _ in range(n)]
+    J = [principal_inertia(rng) for _ in range(n)]
     p = rng.normal(size=(n, 4))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
     R0 = _q._to_matrix(p)
