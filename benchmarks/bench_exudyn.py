@@ -31,7 +31,7 @@ from lgt_bridge.groups import so3  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_exudyn import ExudynModel  # noqa: E402
 
-from _workprecision import wall_at_error  # noqa: E402
+from lgt_bridge.bench import wall_at_error  # noqa: E402
 
 
 class Timer:
@@ -143,7 +143,7 @@ def main(argv=None):
         fams = sorted({r["family"] for r in rows if r["scene"] == name})
         best = {}
         for f in fams:
-            w, exact = wall_at_error([r for r in rows if r["scene"] == name and r["family"] == f], 1e-6)
+            w, exact = wall_at_error([r for r in rows if r["scene"] == name and r["family"] == f], 1e-6, key="error")
             if w is not None:
                 best[f] = (w, exact)
         nat = {f: w for f, w in best.items() if f.startswith("Exudyn")}

@@ -15,7 +15,9 @@ import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -23,37 +25,82 @@ from . import scenes as _scenes
 from .errors import InputError
 from .groups import quaternion as _q
 from .groups import so3
+from .plugins import adapters
 from .simulate import simulate
 
+@dataclass
+class BenchScene:
+    """A bench scene: ``make() -> model``, the end time, and the engine's own solvers
+    as baselines: ``natives[name] = (kind, settings, run)`` with kind "dt"/"tol"/"n"
+    and ``run(setting) -> dict(q=final q in the model's coordinates, n_f, n_steps)``
+    (n_f None where the solver does not expose its evaluations)."""
+
+    make: Callable
+    t_end: float
+    natives: dict = field(default_factory=dict)
+    about: str = ""
+
+
 SCENES = {
-    "heavy_top": (lambda: _scenes.heavy_top(True), 0.1),
-    "heavy_top_pivot": (lambda: _scenes.heavy_top(False), 0.1),
-    "free_body": (lambda: _scenes.free_body((1.0, 2.0, 3.0), (0.01, 2.0, 0.01)), 10.0),
-    "chain": (lambda: _scenes.chain(5), 1.0),
+    "heavy_top": BenchScene(lambda: _scenes.heavy_top(True), 0.1, about="heavy top, spherical joint"),
+    "heavy_top_pivot": BenchScene(lambda: _scenes.heavy_top(False), 0.1, about="heavy top, frame at the pivot"),
+    "free_body": BenchScene(lambda: _scenes.free_body((1.0, 2.0, 3.0), (0.01, 2.0, 0.01)), 10.0,
+                            about="torque-free asymmetric body (Dzhanibekov flip)"),
+    "chain": BenchScene(lambda: _scenes.chain(5), 1.0, about="5 links, spherical joints"),
+    "top_and_free_bodies": BenchScene(lambda: _scenes.top_and_free_bodies(3), 0.5,
+                                      about="jointed top + 3 free bodies"),
 }
 FIXED = ("euler", "rkmk2", "rkmk4", "genalpha")
 REFERENCE = dict(method="dopri5", group="SE3", chart="exp", rtol=1e-12, atol=1e-12)
 
 
-def load_scene(spec):
-    """(model, t_end) from a built-in name or 'file.py:function'."""
-    if spec in SCENES:
-        make, T = SCENES[spec]
-        return make(), T
+def all_scenes():
+    """Built-in scenes plus those the installed adapters register (``bench_scenes()``
+    on the plugin: the engines' example scenes with their native solvers)."""
+    out = dict(SCENES)
+    for name, ep in sorted(adapters().items()):
+        try:
+            plugin = ep.load()
+        except ImportError:
+            continue
+        if hasattr(plugin, "bench_scenes"):
+            try:
+                out.update(plugin.bench_scenes())
+            except ImportError:                 # the engine itself is not installed
+                continue
+    return out
+
+
+def get_scene(spec):
+    """The BenchScene of a name or of 'file.py:function' (which returns (model, t_end))."""
+    scenes = all_scenes()
+    if spec in scenes:
+        return scenes[spec]
     if ":" in spec:
         path, fn = spec.rsplit(":", 1)
         if Path(path).is_file():
-            s = importlib.util.spec_from_file_location("lgt_bench_user_scene", path)
-            mod = importlib.util.module_from_spec(s)
-            s.loader.exec_module(mod)
-            if not hasattr(mod, fn):
-                raise InputError(f"bench: {path} has no function {fn!r}; it must return (model, t_end).")
-            out = getattr(mod, fn)()
-            if not (isinstance(out, tuple) and len(out) == 2):
-                raise InputError(f"bench: {spec} must return (model, t_end), got {type(out).__name__}.")
-            return out
-    raise InputError(f"bench: unknown scene {spec!r}; use one of {sorted(SCENES)} or "
+            return BenchScene(lambda: _user_scene(path, fn, spec), None)
+    raise InputError(f"bench: unknown scene {spec!r}; use one of {sorted(scenes)} or "
                      "'path/to/file.py:function' returning (model, t_end).")
+
+
+def _user_scene(path, fn, spec):
+    s = importlib.util.spec_from_file_location("lgt_bench_user_scene", path)
+    mod = importlib.util.module_from_spec(s)
+    s.loader.exec_module(mod)
+    if not hasattr(mod, fn):
+        raise InputError(f"bench: {path} has no function {fn!r}; it must return (model, t_end).")
+    out = getattr(mod, fn)()
+    if not (isinstance(out, tuple) and len(out) == 2):
+        raise InputError(f"bench: {spec} must return (model, t_end), got {type(out).__name__}.")
+    return out
+
+
+def load_scene(spec):
+    """(model, t_end) from a scene name or 'file.py:function'."""
+    sc = get_scene(spec)
+    out = sc.make()
+    return out if sc.t_end is None else (out, sc.t_end)
 
 
 def pose_error(model, q, q_ref):
@@ -85,45 +132,150 @@ def _one(spec, method, group, chart, setting, q_ref, V_ref):
     model, T = load_scene(spec)
     kw = dict(dt=setting) if method in FIXED else dict(rtol=setting, atol=setting)
     t0 = time.perf_counter()
-    r = simulate(model, (0.0, T), method=method, group=group, chart=chart, t_eval=[0.0, T], **kw)
+    r = simulate(model, (0.0, T), method=method, group=group, chart=chart, **kw)
     wall = time.perf_counter() - t0
     row = dict(method=method, group=group, chart=chart, setting=("dt" if method in FIXED else "tol"),
                value=setting, success=r.success, message=r.message, wall_s=wall,
                n_f=r.stats["n_f"], n_steps=r.stats["n_steps"], n_rejected=r.stats["n_rejected"])
+    if "auto" in r.stats:
+        row["auto"] = sorted({(c["group"], c["chart"]) for c in r.stats["auto"]})
     if r.success:
         row["pose_error"] = pose_error(model, r.q[-1], q_ref)
         row["velocity_error"] = float(np.abs(r.V[-1] - V_ref).max())
         row["constraint_residual"] = float(np.abs(model.constraints(r.q[-1])).max()) if model.n_constraints else 0.0
-        if hasattr(model, "energy"):
-            E0, E1 = model.energy(r.q[0], r.V[0]), model.energy(r.q[-1], r.V[-1])
-            row["energy_drift"] = float(abs(E1 - E0) / max(abs(E0), 1e-300))
+    if hasattr(model, "energy") and len(r.t):
+        idx = np.unique(np.linspace(0, len(r.t) - 1, min(len(r.t), 60)).astype(int))
+        E0 = model.energy(r.q[0], r.V[0])
+        drift = [float(abs(model.energy(r.q[i], r.V[i]) - E0) / max(abs(E0), 1e-300)) for i in idx]
+        row["energy_t"], row["energy_drift_t"] = r.t[idx].tolist(), drift
+        if r.success:
+            row["energy_drift"] = drift[-1]
     return row
 
 
-def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=True):
-    """Run the sweep; returns (reference dict, rows)."""
+def _one_native(spec, name, setting, q_ref):
+    model, T = load_scene(spec)
+    kind, _, run = get_scene(spec).natives[name]
+    t0 = time.perf_counter()
+    try:
+        out = run(setting)
+        ok, msg = bool(np.isfinite(out["q"]).all()), "reached the end of t_span"
+    except Exception as exc:            # an engine solver failing is a result, not a crash
+        out, ok, msg = dict(q=None, n_f=None, n_steps=None), False, f"{type(exc).__name__}: {exc}"
+    wall = time.perf_counter() - t0
+    row = dict(method=name, group="native", chart="engine", setting=kind, value=setting, success=ok,
+               message=msg, wall_s=wall, n_f=out.get("n_f"), n_steps=out.get("n_steps"), n_rejected=None)
+    if ok:
+        row["pose_error"] = pose_error(model, out["q"], q_ref)
+        row["velocity_error"] = None
+        row["constraint_residual"] = (float(np.abs(model.constraints(out["q"])).max())
+                                      if model.n_constraints else 0.0)
+    return row
+
+
+def _executor(workers, scheduler):
+    """(submit, as_completed, close) for local processes or a Dask cluster.
+    scheduler: None (local processes), "local" (a Dask LocalCluster started here),
+    an address "tcp://host:port", or a ``distributed.Client``."""
+    if scheduler is None:
+        ex = ProcessPoolExecutor(max_workers=workers)
+        return ex.submit, as_completed, ex.shutdown
+    try:
+        from dask import distributed
+    except ImportError:
+        raise InputError("bench: a Dask scheduler needs dask.distributed: "
+                         "pip install 'lgt-bridge[dask]'.") from None
+    if isinstance(scheduler, distributed.Client):
+        return scheduler.submit, distributed.as_completed, lambda: None
+    if scheduler == "local":
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=None)
+        client = distributed.Client(cluster)
+
+        def close():
+            client.close()
+            cluster.close()
+    else:
+        client = distributed.Client(scheduler)
+        close = client.close
+    return (lambda fn, *a: client.submit(fn, *a, pure=False)), distributed.as_completed, close
+
+
+def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=True, scheduler=None, auto=True,
+          natives=True):
+    """Run the sweep; returns (reference dict, rows). With ``auto`` every method also
+    runs with group = chart = "auto"; with ``natives`` the scene's engine solvers run
+    too (group "native"). ``scheduler``: see :func:`_executor`."""
     model, T = load_scene(spec)
     t0 = time.perf_counter()
     ref = simulate(model, (0.0, T), t_eval=[0.0, T], **REFERENCE)
     if not ref.success:
         raise InputError(f"bench: the reference run failed ({ref.message}).")
     reference = dict(REFERENCE, n_steps=ref.stats["n_steps"], wall_s=time.perf_counter() - t0, t_end=T)
-    jobs = [(spec, m, g, c, s, ref.q[-1], ref.V[-1]) for m in methods for g in groups for c in charts
+    combos = [(g, c) for g in groups for c in charts] + ([("auto", "auto")] if auto else [])
+    jobs = [(_one, spec, m, g, c, s, ref.q[-1], ref.V[-1]) for m in methods for g, c in combos
             for s in (dts if m in FIXED else tols)]
+    if natives:
+        jobs += [(_one_native, spec, name, s, ref.q[-1]) for name, (_, settings, _) in
+                 get_scene(spec).natives.items() for s in settings]
     rows = []
     workers = workers or os.cpu_count() or 1
-    if workers == 1:
+    if workers == 1 and scheduler is None:
         for k, j in enumerate(jobs):
-            rows.append(_one(*j))
+            rows.append(j[0](*j[1:]))
             _bar(progress, k + 1, len(jobs))
     else:
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            futs = [ex.submit(_one, *j) for j in jobs]
-            for k, f in enumerate(as_completed(futs)):
+        submit, completed, close = _executor(workers, scheduler)
+        try:
+            futs = [submit(*j) for j in jobs]
+            for k, f in enumerate(completed(futs)):
                 rows.append(f.result())
                 _bar(progress, k + 1, len(jobs))
+        finally:
+            close()
     rows.sort(key=lambda r: (r["method"], r["group"], r["chart"], -r["value"]))
     return reference, rows
+
+
+def wall_at_error(rows, target, key="pose_error"):
+    """(wall time at ``target`` error, exact?) along one series' runs: log-log
+    interpolation where the runs bracket the target, otherwise the cheapest run at or
+    below it (an upper bound, exact = False); (None, False) when no run reaches it."""
+    pts = sorted((r[key], r["wall_s"]) for r in rows if r.get("success", True) and r[key] > 0 and np.isfinite(r[key]))
+    for (e1, w1), (e2, w2) in zip(pts, pts[1:]):
+        if e1 <= target <= e2:
+            f = (np.log(target) - np.log(e1)) / (np.log(e2) - np.log(e1))
+            return float(np.exp(np.log(w1) + f * (np.log(w2) - np.log(w1)))), True
+    below = [w for e, w in pts if e <= target]
+    return (min(below), False) if below else (None, False)
+
+
+def best_at(rows, target):
+    """{"bridge": (series, wall, exact), "native": ...}: the cheapest series at ``target``."""
+    series = {}
+    for r in rows:
+        series.setdefault((r["method"], r["group"], r["chart"]), []).append(r)
+    best = {}
+    for key, rs in series.items():
+        w, exact = wall_at_error(rs, target)
+        side = "native" if key[1] == "native" else "bridge"
+        if w is not None and (side not in best or w < best[side][1]):
+            best[side] = (" ".join(key), w, exact)
+    return best
+
+
+def front_gaps(rows):
+    """For every "auto" run: its wall time and f evaluations over the cheapest other run
+    that is at least as accurate (≤ 1: on the front; None: no other run is as accurate)."""
+    others = [r for r in rows if r["success"] and r["group"] != "auto"]
+    out = []
+    for a in rows:
+        if a["group"] != "auto" or not a["success"]:
+            continue
+        better = [r for r in others if r["pose_error"] <= a["pose_error"]]
+        out.append(dict(method=a["method"], value=a["value"], pose_error=a["pose_error"],
+                        wall_ratio=(a["wall_s"] / min(r["wall_s"] for r in better)) if better else None,
+                        n_f_ratio=(a["n_f"] / min(r["n_f"] for r in better)) if better else None))
+    return out
 
 
 def _bar(on, k, n):
@@ -134,11 +286,20 @@ def _bar(on, k, n):
         sys.stderr.flush()
 
 
-def write_report(out, spec, reference, rows):
+def _f(v, fmt):
+    return "–" if v is None else format(v, fmt)
+
+
+def write_report(out, spec, reference, rows, plots=True, target=1e-6):
+    """JSON of every run, a Markdown report and (with matplotlib) the PNG plots."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     name = Path(spec.split(":")[0]).stem if ":" in spec else spec
-    (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, reference=reference, runs=rows), indent=1))
+    gaps = front_gaps(rows)
+    best = {k: dict(series=v[0], wall_s=v[1], exact=v[2]) for k, v in best_at(rows, target).items()}
+    (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, reference=reference, runs=rows,
+                                                            auto_front=gaps, target=target, best_at_target=best),
+                                                       indent=1))
     lines = [f"# Work-precision: {spec}", "",
              f"Reference: {reference['method']} on {reference['group']}/{reference['chart']} at rtol = atol = "
              f"{reference['rtol']:g}, t = 0 … {reference['t_end']:g} ({reference['n_steps']} steps).", "",
@@ -147,11 +308,42 @@ def write_report(out, spec, reference, rows):
     for r in rows:
         if r["success"]:
             lines.append(f"| {r['method']} | {r['group']} | {r['chart']} | {r['setting']}={r['value']:g} | "
-                         f"{r['pose_error']:.2e} | {r['velocity_error']:.2e} | {r['constraint_residual']:.1e} | "
-                         f"{r.get('energy_drift', float('nan')):.1e} | {r['n_f']} | {r['n_steps']} | {r['wall_s']:.3f} |")
+                         f"{r['pose_error']:.2e} | {_f(r['velocity_error'], '.2e')} | {r['constraint_residual']:.1e} | "
+                         f"{_f(r.get('energy_drift'), '.1e')} | {_f(r['n_f'], 'd')} | {_f(r['n_steps'], 'd')} | "
+                         f"{r['wall_s']:.3f} |")
         else:
             lines.append(f"| {r['method']} | {r['group']} | {r['chart']} | {r['setting']}={r['value']:g} | "
-                         f"failed: {r['message']} | | | | {r['n_f']} | {r['n_steps']} | {r['wall_s']:.3f} |")
+                         f"failed: {r['message']} | | | | {_f(r['n_f'], 'd')} | {_f(r['n_steps'], 'd')} | "
+                         f"{r['wall_s']:.3f} |")
+    best = best_at(rows, target)
+    lines += ["", f"## Cheapest at pose error {target:g}", ""]
+    for side in ("bridge", "native"):
+        if side in best:
+            series, w, exact = best[side]
+            lines.append(f"- {side}: {series}, {'' if exact else '≤ '}{w:.3f} s"
+                         f"{'' if exact else ' (cheapest run below the target; not bracketed)'}")
+        else:
+            lines.append(f"- {side}: no run reached it" if side == "bridge" or get_scene(spec).natives
+                         else "- native: this scene has no engine solver")
+    if "bridge" in best and "native" in best:
+        lines.append(f"- native / bridge wall time: {best['native'][1] / best['bridge'][1]:.2f}")
+    if gaps:
+        chosen = sorted({tuple(x) for r in rows if "auto" in r for x in r["auto"]})
+        lines += ["", "## auto against the front", "",
+                  f"group = chart = \"auto\" chose {', '.join('/'.join(c) for c in chosen)}. Ratio = this run's "
+                  "cost over the cheapest other run at least as accurate (≤ 1: on the front).", "",
+                  "| method | setting | pose error | wall ratio | f-eval ratio |", "|---|---|---:|---:|---:|"]
+        for g in gaps:
+            fmt = lambda v: "front" if v is not None and v <= 1 else ("–" if v is None else f"{v:.2f}")  # noqa: E731
+            lines.append(f"| {g['method']} | {g['value']:g} | {g['pose_error']:.2e} | {fmt(g['wall_ratio'])} | "
+                         f"{fmt(g['n_f_ratio'])} |")
+    if plots:
+        from .plots import work_precision_plots
+        made = work_precision_plots(out, name, rows)
+        if made:
+            lines += ["", "## Plots", ""] + [f"![{p.stem}]({p.name})" for p in made]
+        else:
+            lines += ["", "(no plots: matplotlib is not installed; pip install 'lgt-bridge[plot]')"]
     path = out / f"bench_{name}.md"
     path.write_text("\n".join(lines) + "\n")
     return path

@@ -53,8 +53,9 @@ def main(argv=None):
     r.add_argument("--atol", type=float, default=None)
     b = sub.add_parser("bench", help="work-precision sweep of method x group x chart x tolerance/step "
                        "on a scene, against a tight reference; writes JSON and Markdown")
-    b.add_argument("scene", help="built-in scene (heavy_top, heavy_top_pivot, free_body, chain) or "
-                   "path/to/file.py:function returning (model, t_end)")
+    b.add_argument("scene", help="built-in scene (heavy_top, heavy_top_pivot, free_body, chain, "
+                   "top_and_free_bodies), path/to/file.py:function returning (model, t_end), or "
+                   "'extremes' for the extremes suite's report")
     b.add_argument("--methods", default="rkmk4,dopri5")
     b.add_argument("--groups", default="SE3,SO3xR3")
     b.add_argument("--charts", default="exp,cay")
@@ -62,14 +63,27 @@ def main(argv=None):
     b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods")
     b.add_argument("--out", default="bench-results")
     b.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
+    b.add_argument("--scheduler", default=None, help="run the sweep on a Dask cluster at this address "
+                   "(tcp://host:port)")
+    b.add_argument("--dask", choices=["local"], default=None, help="'local': start a Dask LocalCluster")
+    b.add_argument("--no-auto", action="store_true", help="leave out the group=chart='auto' runs")
+    b.add_argument("--no-plots", action="store_true", help="Markdown and JSON only")
+    b.add_argument("--long-steps", type=int, default=1_000_000,
+                   help="extremes: steps of the long run per method (default 10⁶)")
     a = ap.parse_args(argv)
+    if a.cmd == "bench" and a.scene == "extremes":
+        from . import extremes
+        path = extremes.write_report(a.out, long_steps=a.long_steps)
+        print(path.read_text())
+        return 0
     if a.cmd == "bench":
         from . import bench
         floats = lambda s: [float(x) for x in s.split(",") if x]   # noqa: E731
         words = lambda s: [x for x in s.split(",") if x]           # noqa: E731
         ref, rows = bench.sweep(a.scene, words(a.methods), words(a.groups), words(a.charts),
-                                floats(a.tols), floats(a.dts), workers=a.workers)
-        path = bench.write_report(a.out, a.scene, ref, rows)
+                                floats(a.tols), floats(a.dts), workers=a.workers,
+                                scheduler=a.scheduler or a.dask, auto=not a.no_auto)
+        path = bench.write_report(a.out, a.scene, ref, rows, plots=not a.no_plots)
         print(path.read_text())
         return 0
     if a.cmd == "run":

@@ -15,6 +15,12 @@ class _ExudynPlugin:
         return ExudynModel(obj, **options)
 
     @staticmethod
+    def bench_scenes():
+        """Example scenes with Exudyn's own solvers as native baselines."""
+        from .bench import bench_scenes
+        return bench_scenes()
+
+    @staticmethod
     def patch(options):
         """Context manager routing every exu.SolveDynamic / mbs.SolveDynamic to the bridge."""
         from .run import route_solve_dynamic

@@ -14,5 +14,11 @@ class _PinocchioPlugin:
         from .model import PinocchioModel
         return PinocchioModel(obj, **options)
 
+    @staticmethod
+    def bench_scenes():
+        """Example scenes with the Pinocchio user loops as native baselines."""
+        from .bench import bench_scenes
+        return bench_scenes()
+
 
 PLUGIN = _PinocchioPlugin()

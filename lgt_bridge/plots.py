@@ -1,0 +1,62 @@
+"""PNG plots of a bench sweep (matplotlib, optional): error against wall time and
+against f evaluations (work-precision diagrams), and energy drift over time."""
+from collections import defaultdict
+
+
+def _series(rows):
+    out = defaultdict(list)
+    for r in rows:
+        out[(r["method"], r["group"], r["chart"])].append(r)
+    return out
+
+
+def work_precision_plots(out, name, rows):
+    """Write the three plots into ``out``; returns their paths ([] without matplotlib)."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return []
+    series = _series(rows)
+    paths = []
+    for key, xlabel, fname in (("wall_s", "wall time [s]", "wall"), ("n_f", "f evaluations", "nf")):
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for (m, g, c), rs in sorted(series.items()):
+            ok = sorted((r for r in rs if r["success"] and r[key] is not None), key=lambda r: r[key])
+            if not ok:
+                continue
+            auto, native = g == "auto", g == "native"
+            ax.loglog([r[key] for r in ok], [max(r["pose_error"], 1e-17) for r in ok],
+                      marker="*" if auto else ("s" if native else "o"), ms=10 if auto else 4,
+                      lw=2.5 if auto else 1, ls="--" if native else "-",
+                      label=f"{m} (engine)" if native else f"{m} {g}/{c}")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("final pose error (rad + m)")
+        ax.set_title(f"{name}: work-precision")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, ncol=2)
+        p = out / f"{name}_error_vs_{fname}.png"
+        fig.tight_layout()
+        fig.savefig(p, dpi=100)
+        plt.close(fig)
+        paths.append(p)
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for (m, g, c), rs in sorted(series.items()):
+        ok = [r for r in rs if r["success"] and "energy_t" in r]
+        if not ok:
+            continue
+        fine = min(ok, key=lambda r: r["value"])          # finest step / tightest tolerance
+        ax.semilogy(fine["energy_t"], [max(e, 1e-17) for e in fine["energy_drift_t"]],
+                    label=f"{m} {g}/{c} {fine['setting']}={fine['value']:g}")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("|E(t) - E(0)| / |E(0)|")
+    ax.set_title(f"{name}: energy drift (finest setting of each series)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    p = out / f"{name}_energy_drift.png"
+    fig.tight_layout()
+    fig.savefig(p, dpi=100)
+    plt.close(fig)
+    paths.append(p)
+    return paths
