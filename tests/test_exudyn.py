@@ -222,3 +222,34 @@ def test_failing_step_leaves_system_at_last_good_state():
     with pytest.raises(StepError, match="left at t = 0.02"):
         SolveDynamic(mbs, em.settings(0.1, 100), method="rkmk4")
     assert mbs.systemData.GetTime() == pytest.approx(0.02) and np.isfinite(em.total_q(mbs)).all()
+
+
+def test_bench_scene_with_exudyn_natives():
+    """exudyn_heavy_top: Exudyn's generalized-α on EP and on RotVecLG (converted to the EP
+    model's coordinates) converge to the bridge's reference with the steps."""
+    from lgt_bridge import bench
+    _, rows = bench.sweep("exudyn_heavy_top", ["dopri5"], ["SO3xR3"], ["exp"], [1e-7], [], workers=1,
+                            progress=False, auto=False)
+    nat = {(r["method"], r["value"]): r for r in rows if r["group"] == "native"}
+    assert len(nat) == 6 and all(r["success"] and r["constraint_residual"] < 1e-8 for r in nat.values())
+    for fam in ("Exudyn generalized-α, EP", "Exudyn generalized-α, RotVecLG"):
+        e = [nat[(fam, n)]["pose_error"] for n in (2000, 8000, 32000)]
+        assert e[2] < e[1] < e[0] < 1e-1 and 12 < e[0] / e[1] < 20       # 2nd order: 4² = 16
+    bridge = [r for r in rows if r["group"] == "SO3xR3"][0]
+    assert bridge["success"] and bridge["pose_error"] < 1e-5
+    assert "native" in bench.best_at(rows, 1e-3) and "bridge" in bench.best_at(rows, 1e-3)
+
+
+def test_bench_free_bodies_exudyn_dopri5_native():
+    from lgt_bridge import bench
+    from lgt_exudyn.bench import convert_q
+    sc = bench.get_scene("exudyn_free_bodies")
+    model = sc.make()
+    q = sc.natives["Exudyn DOPRI5, RotVecLG"][2](1e-9)["q"]
+    tight = simulate(model, (0, sc.t_end), method="dopri5", rtol=1e-12, atol=1e-12, t_eval=[sc.t_end])
+    assert bench.pose_error(model, q, tight.q[-1]) < 1e-7
+    ep = ExudynModel(em.heavy_top(em.EP)[1])
+    rv = ExudynModel(em.heavy_top(em.ROTVEC)[1])
+    q_rv = convert_q(ep, ep.q0, rv)                      # EP -> rotation vector -> EP
+    np.testing.assert_allclose(convert_q(rv, q_rv, ep), ep.q0, atol=1e-15)
+    assert bench.pose_error(rv, q_rv, rv.q0) < 1e-15

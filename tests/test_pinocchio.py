@@ -314,3 +314,15 @@ def test_spherical_joint_as_rotation_only_body(group, chart):
     assert ref.angle(R_xyzw(np.r_[0, 0, 0, r.q[-1][7:11]]), R_xyzw(np.r_[0, 0, 0, qref[7:11]])) < 1e-8
     assert abs(r.q[-1][11] - qref[11]) < 1e-8                                   # hinge
     assert abs(np.linalg.norm(r.q[-1][7:11]) - 1) < 1e-14
+
+
+def test_bench_scene_with_the_user_loops_as_natives():
+    from lgt_bridge import bench
+    _, rows = bench.sweep("pinocchio_humanoid", ["dopri5"], ["SO3xR3"], ["exp"], [1e-8], [], workers=1,
+                          progress=False, auto=False)
+    nat = {(r["method"], r["value"]): r for r in rows if r["group"] == "native"}
+    assert len(nat) == 9 and all(r["success"] for r in nat.values())
+    e = [nat[("semi-implicit Euler + pin.integrate", dt)]["pose_error"] for dt in (1e-3, 4e-4, 1e-4)]
+    assert e[2] < e[1] < e[0] and 5 < e[0] / e[2] < 20                        # first order: 10
+    assert nat[("DOP853 + renormalization", 1e-10)]["pose_error"] < 1e-7
+    assert [r for r in rows if r["group"] == "SO3xR3"][0]["pose_error"] < 1e-6

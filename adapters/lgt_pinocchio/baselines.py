@@ -79,6 +79,9 @@ def free_body():
 
 
 def humanoid():
+    """Pinocchio's random sample humanoid, the same on every call (Pinocchio's RNG is
+    seeded: the bench builds the scene once per run, in several processes)."""
+    pin.seed(3)
     m = pin.buildSampleModelHumanoidRandom()
     rng = np.random.default_rng(3)
     return m, pin.randomConfiguration(m, -np.ones(m.nq), np.ones(m.nq)), rng.normal(size=m.nv) * 0.5
