@@ -78,8 +78,7 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
             i = int(np.flatnonzero(~np.isfinite(arr))[0])
             raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                              "give a finite initial state.")
-    for k, b in enumerate(lay.bodies):
-        b.validate(q0, f"q0 of body {k}" + (f" ({b.name})" if b.name else ""))
+    _validate_bodies(lay, q0)
     if t_eval is not None:
         t_eval = np.asarray(t_eval, float).ravel()
         if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):
@@ -87,6 +86,26 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
         if t_eval[0] < t0 or t_eval[-1] > t1:
             raise InputError(f"t_eval must lie within t_span [{t0}, {t1}].")
     return t0, t1, q0, V0, t_eval
+
+
+def _validate_bodies(lay, q0):
+    """Every body's coordinates, batched per parameterization; on failure the body-by-body
+    pass names the first bad body."""
+    groups = {}
+    for b in lay.bodies:
+        groups.setdefault((b.param.name, b.rotation_only), []).append(b)
+    for bodies in groups.values():
+        rows = q0[np.array([[*b.pos, *b.rot] for b in bodies])]
+        try:
+            if bodies[0].rotation_only:
+                bodies[0].param._rot(rows, "q0")
+            else:
+                bodies[0].param.validate(rows, "q0")
+        except InputError:
+            for b in bodies:
+                k = lay.bodies.index(b)
+                b.validate(q0, f"q0 of body {k}" + (f" ({b.name})" if b.name else ""))
+            raise
 
 
 class _Progress:

@@ -299,6 +299,14 @@ def test_bad_input_rejected_before_stepping(kwargs, match):
     assert m.calls == 0 and not m.writes
 
 
+def test_bad_body_among_many_is_named():
+    m = scenes.chain(4)
+    q0 = m.q0.copy()
+    q0[2 * 7 + 3:2 * 7 + 7] *= 1.01                    # third link's quaternion off the unit sphere
+    with pytest.raises(InputError, match=r"q0 of body 2 \(link2\)"):
+        simulate(m, (0, 1), dt=0.1, q0=q0)
+
+
 def test_nan_step_stops_with_earlier_steps_kept():
     m = counting_free_body()
     m.nan_after = 0.0505
