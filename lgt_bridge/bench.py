@@ -272,9 +272,10 @@ def front_gaps(rows):
         if a["group"] != "auto" or not a["success"]:
             continue
         better = [r for r in others if r["pose_error"] <= a["pose_error"]]
+        counted = [r["n_f"] for r in better if r["n_f"] is not None]     # engines may not count
         out.append(dict(method=a["method"], value=a["value"], pose_error=a["pose_error"],
                         wall_ratio=(a["wall_s"] / min(r["wall_s"] for r in better)) if better else None,
-                        n_f_ratio=(a["n_f"] / min(r["n_f"] for r in better)) if better else None))
+                        n_f_ratio=(a["n_f"] / min(counted)) if counted else None))
     return out
 
 

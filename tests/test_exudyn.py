@@ -224,12 +224,15 @@ def test_failing_step_leaves_system_at_last_good_state():
     assert mbs.systemData.GetTime() == pytest.approx(0.02) and np.isfinite(em.total_q(mbs)).all()
 
 
-def test_bench_scene_with_exudyn_natives():
+def test_bench_scene_with_exudyn_natives(tmp_path):
     """exudyn_heavy_top: Exudyn's generalized-α on EP and on RotVecLG (converted to the EP
     model's coordinates) converge to the bridge's reference with the steps."""
     from lgt_bridge import bench
-    _, rows = bench.sweep("exudyn_heavy_top", ["dopri5"], ["SO3xR3"], ["exp"], [1e-7], [], workers=1,
+    ref, rows = bench.sweep("exudyn_heavy_top", ["dopri5"], ["SO3xR3"], ["exp"], [1e-7], [], workers=1,
                             progress=False, auto=False)
+    model = bench.load_scene("exudyn_heavy_top")[0]
+    tight = simulate(model, (0, ref["t_end"]), t_eval=[ref["t_end"]], **bench.REFERENCE)
+    ref_state = (tight.q[-1], tight.V[-1])
     nat = {(r["method"], r["value"]): r for r in rows if r["group"] == "native"}
     assert len(nat) == 6 and all(r["success"] and r["constraint_residual"] < 1e-8 for r in nat.values())
     for fam in ("Exudyn generalized-α, EP", "Exudyn generalized-α, RotVecLG"):
@@ -238,6 +241,9 @@ def test_bench_scene_with_exudyn_natives():
     bridge = [r for r in rows if r["group"] == "SO3xR3"][0]
     assert bridge["success"] and bridge["pose_error"] < 1e-5
     assert "native" in bench.best_at(rows, 1e-3) and "bridge" in bench.best_at(rows, 1e-3)
+    auto = bench._one("exudyn_heavy_top", "dopri5", "auto", "auto", 1e-7, *ref_state)
+    text = bench.write_report(tmp_path, "exudyn_heavy_top", ref, rows + [auto], plots=False).read_text()
+    assert "| Exudyn generalized-α, EP | native | engine | n=2000 |" in text and "## auto against" in text
 
 
 def test_bench_free_bodies_exudyn_dopri5_native():
