@@ -41,6 +41,8 @@ def work_precision_plots(out, name, rows):
         fig.savefig(p, dpi=100)
         plt.close(fig)
         paths.append(p)
+    if not any("energy_t" in r for r in rows):        # the model has no energy()
+        return paths
     fig, ax = plt.subplots(figsize=(7, 5))
     for (m, g, c), rs in sorted(series.items()):
         ok = [r for r in rs if r["success"] and "energy_t" in r]

@@ -234,7 +234,7 @@ def test_bench_scene_with_exudyn_natives(tmp_path):
     tight = simulate(model, (0, ref["t_end"]), t_eval=[ref["t_end"]], **bench.REFERENCE)
     ref_state = (tight.q[-1], tight.V[-1])
     nat = {(r["method"], r["value"]): r for r in rows if r["group"] == "native"}
-    assert len(nat) == 6 and all(r["success"] and r["constraint_residual"] < 1e-8 for r in nat.values())
+    assert len(nat) == 8 and all(r["success"] and r["constraint_residual"] < 1e-8 for r in nat.values())
     for fam in ("Exudyn generalized-α, EP", "Exudyn generalized-α, RotVecLG"):
         e = [nat[(fam, n)]["pose_error"] for n in (2000, 8000, 32000)]
         assert e[2] < e[1] < e[0] < 1e-1 and 12 < e[0] / e[1] < 20       # 2nd order: 4² = 16

@@ -2,7 +2,7 @@
 
 * ``exudyn_heavy_top`` — the example heavy top (EP node, spherical joint), 0.5 s;
   natives: generalized-α on EP nodes and on RotVecLG nodes (Lie group, simplified
-  kinematic relations), steps from 2000 to 32000.
+  kinematic relations), steps from 2000 to 128000.
 * ``exudyn_chain`` — 10 links on spherical joints, 1 s; the same natives.
 * ``exudyn_free_bodies`` — 8 torque-free bodies on RotVecLG nodes, 2 s; natives:
   Exudyn's explicit Lie group DOPRI5 (C++, adaptive) and RK44.
@@ -69,11 +69,11 @@ def bench_scenes():
     def chain(node):
         return _s.chain(10, node)
 
-    ga_steps = [2000, 8000, 32000]
+    ga_steps = [2000, 8000, 32000, 128000]
     out = {}
     for name, build, T, steps, about in (
             ("exudyn_heavy_top", top, 0.5, ga_steps, "Exudyn heavy top, EP node + spherical joint, 0.5 s"),
-            ("exudyn_chain", chain, 1.0, [250, 1000, 4000], "Exudyn chain of 10 links, spherical joints, 1 s")):
+            ("exudyn_chain", chain, 1.0, [250, 1000, 4000, 16000], "Exudyn chain of 10 links, spherical joints, 1 s")):
         out[name] = BenchScene(lambda build=build: ExudynModel(build(_s.EP)[1]), T,
                                {"Exudyn generalized-α, EP": ("n", steps, _ga(build, T, _s.EP)),
                                 "Exudyn generalized-α, RotVecLG": ("n", steps, _ga(build, T, _s.ROTVEC))},
