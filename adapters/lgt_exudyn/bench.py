@@ -49,7 +49,8 @@ def _explicit(build, T, solver, adaptive):
     def run(setting):
         _, mbs = build()[:2]
         s = _s.settings(T, 100 if adaptive else int(setting))
-        s.timeIntegration.explicitIntegration.useLieGroupIntegration = True
+        ti = s.timeIntegration                    # 'explicit' replaces 'explicitIntegration' in newer Exudyn
+        (ti.explicit if hasattr(ti, "explicit") else ti.explicitIntegration).useLieGroupIntegration = True
         if adaptive:
             s.timeIntegration.automaticStepSize = True
             s.timeIntegration.absoluteTolerance = setting

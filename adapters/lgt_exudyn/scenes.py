@@ -55,7 +55,10 @@ def settings(T, n, write=False, sensors=False):
     s.timeIntegration.verboseMode = 0
     s.solution.file.write = write
     s.solution.sensors.active = sensors
-    s.displayComputationTime = False
+    if hasattr(s, "show"):                           # newer Exudyn; displayComputationTime is deprecated
+        s.show.computationTime = False
+    else:
+        s.displayComputationTime = False
     return s
 
 
