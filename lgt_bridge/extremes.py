@@ -15,7 +15,7 @@ from . import scenes
 from .analytic import torque_free_omega
 from .errors import ChartDomainError
 from .groups import quaternion as _q
-from .groups import so3
+from .groups import se3, so3
 from .simulate import simulate
 
 #: per-step rotation angles of the update-accuracy case (exp chart)
@@ -25,14 +25,6 @@ ANGLES = (1e-12, 1e-8, 1e-4, 1e-1, 1.0, 3.0, np.pi - 1e-9, np.pi, np.pi + 1e-9, 
 
 def _angle(R1, R2):
     return float(np.linalg.norm(so3.log(R1.T @ R2)))
-
-
-def se3_hat(X):
-    """4x4 matrix of the se(3) element X = (x rotation, y translation), body frame."""
-    Xh = np.zeros((4, 4))
-    Xh[:3, :3] = so3.hat(X[:3])
-    Xh[:3, 3] = X[3:]
-    return Xh
 
 
 def update_cases(seed=0):
@@ -56,7 +48,7 @@ def update_accuracy(reference=None):
     (``reference(H_k, X, group) -> H`` defaults to scipy's expm in double)."""
     def expm_ref(H_k, X, group):
         if group == "SE3":
-            return H_k @ sla.expm(se3_hat(X))
+            return H_k @ sla.expm(se3.hat6(X))
         H = H_k.copy()
         H[:3, :3] = H_k[:3, :3] @ sla.expm(so3.hat(X[:3]))
         H[:3, 3] += X[3:]

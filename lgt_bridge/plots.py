@@ -31,16 +31,8 @@ def work_precision_plots(out, name, rows):
                       marker="*" if auto else ("s" if native else "o"), ms=10 if auto else 4,
                       lw=2.5 if auto else 1, ls="--" if native else "-",
                       label=f"{m} (engine)" if native else f"{m} {g}/{c}")
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel("final pose error (rad + m)")
-        ax.set_title(f"{name}: work-precision")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, ncol=2)
-        p = out / f"{name}_error_vs_{fname}.png"
-        fig.tight_layout()
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
+        paths.append(_save(plt, fig, ax, out / f"{name}_error_vs_{fname}.png", xlabel,
+                           "final pose error (rad + m)", f"{name}: work-precision"))
     if not any("energy_t" in r for r in rows):        # the model has no energy()
         return paths
     fig, ax = plt.subplots(figsize=(7, 5))
@@ -51,14 +43,18 @@ def work_precision_plots(out, name, rows):
         fine = min(ok, key=lambda r: r["value"])          # finest step / tightest tolerance
         ax.semilogy(fine["energy_t"], [max(e, 1e-17) for e in fine["energy_drift_t"]],
                     label=f"{m} {g}/{c} {fine['setting']}={fine['value']:g}")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("|E(t) - E(0)| / |E(0)|")
-    ax.set_title(f"{name}: energy drift (finest setting of each series)")
+    paths.append(_save(plt, fig, ax, out / f"{name}_energy_drift.png", "t [s]", "|E(t) - E(0)| / |E(0)|",
+                       f"{name}: energy drift (finest setting of each series)"))
+    return paths
+
+
+def _save(plt, fig, ax, path, xlabel, ylabel, title):
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
-    p = out / f"{name}_energy_drift.png"
     fig.tight_layout()
-    fig.savefig(p, dpi=100)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
-    paths.append(p)
-    return paths
+    return path

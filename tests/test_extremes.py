@@ -5,6 +5,7 @@ import pytest
 
 from lgt_bridge import extremes, lgt, scenes
 from lgt_bridge.analytic import torque_free_omega
+from lgt_bridge.groups import se3, so3
 
 EPS = np.finfo(float).eps
 
@@ -14,9 +15,9 @@ def _mp_reference(H_k, X, group):
     other mpmath tests keep theirs)."""
     with mpmath.workdps(40):
         if group == "SE3":
-            E = mpmath.expm(mpmath.matrix(extremes.se3_hat(X).tolist()))
+            E = mpmath.expm(mpmath.matrix(se3.hat6(X).tolist()))
             return H_k @ np.array(E.tolist(), dtype=float)
-        E = np.array(mpmath.expm(mpmath.matrix(extremes.se3_hat(np.r_[X[:3], 0, 0, 0])[:3, :3].tolist())).tolist(),
+        E = np.array(mpmath.expm(mpmath.matrix(so3.hat(X[:3]).tolist())).tolist(),
                      dtype=float)
     H = H_k.copy()
     H[:3, :3] = H_k[:3, :3] @ E

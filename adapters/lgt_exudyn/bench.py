@@ -48,7 +48,8 @@ def _ga(build, T, node):
 def _explicit(build, T, solver, adaptive):
     def run(setting):
         _, mbs = build()[:2]
-        s = _s.settings(T, 100 if adaptive else int(setting))
+        # Exudyn caps an adaptive step at endTime / numberOfSteps: 1 lets the tolerance act
+        s = _s.settings(T, 1 if adaptive else int(setting))
         ti = s.timeIntegration                    # 'explicit' replaces 'explicitIntegration' in newer Exudyn
         (ti.explicit if hasattr(ti, "explicit") else ti.explicitIntegration).useLieGroupIntegration = True
         if adaptive:
