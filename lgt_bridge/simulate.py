@@ -11,7 +11,7 @@ from .integrators import METHODS
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector
 from .integrators.genalpha import GenAlpha
-from .integrators.local import LocalProblem
+from .integrators.local import make_problem
 from .integrators.rkmk import AdaptiveRK, FixedRK
 from .integrators.tableaux import ADAPTIVE, FIXED
 from .integrators.vector_space import ScipyStepper
@@ -132,13 +132,13 @@ def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6,
     """The stepper object behind a method name, with its local problem and projector.
     Returns (stepper, dt) where dt is the (macro) step to use (None: adaptive, chosen
     by the stepper)."""
-    prob = LocalProblem(model, group, chart)
+    prob = make_problem(model, group, chart)
     explicit = method != "genalpha"
     projector = Projector(model) if (explicit and project and model.n_constraints) else None
     if method in FIXED:
         return FixedRK(prob, FIXED[method], projector), dt
     if method in ADAPTIVE:
-        return AdaptiveRK(prob, ADAPTIVE[method], rtol, atol, projector, first_step=dt), dt
+        return AdaptiveRK(prob, ADAPTIVE[method](), rtol, atol, projector, first_step=dt), dt
     if method == "genalpha":
         return GenAlpha(prob, rho_inf=rho_inf, newton_tol=newton_tol), dt
     stepper = ScipyStepper(prob, method[6:], rtol, atol, projector)
@@ -149,40 +149,58 @@ def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6,
 
 
 class Driver:
-    """Advances a stepper to target times: fixed steps of dt (the last one shortened to
-    land on the target) or adaptive steps; counts steps; raises StepFailed."""
+    """Advances a stepper to target times. Fixed steps of dt land on each target (the
+    last step shortened); adaptive methods with a continuous extension step freely up
+    to ``t_end`` and interpolate every target inside their last step (dense output:
+    output times never shorten steps). Counts steps; raises StepFailed."""
 
-    def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000):
+    def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None):
         self.model, self.stepper = model, stepper
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
+        self.t_end = t_end
+        self.dense = bool(getattr(stepper, "dense_capable", False)) and t_end is not None
         self.n_steps = 0
         stepper.set_state(q0, V0)
         self.h = dt if dt is not None else stepper.initial_step(self.t)
 
-    def advance_to(self, target, on_step=None):
+    def _step(self, target, on_step):
         st = self.stepper
-        while self.t < target:
-            if self.n_steps >= self.max_steps:
-                raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
-            h_try = min(self.h, target - self.t)
-            hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
-            if hit:
-                h_try = target - self.t
-            accepted, h_new = st.attempt(self.t, h_try)
-            if accepted:
-                self.n_steps += 1
-                self.t = target if hit else self.t + h_try
-                self.model.write_back(st.q, st.V, self.t)
-                if st.adaptive:
-                    self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
-                else:
-                    self.h = h_new if h_new is not None else self.dt
-                if on_step is not None:
-                    on_step(self.t, st.q, st.V)
+        if self.n_steps >= self.max_steps:
+            raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
+        h_try = min(self.h, target - self.t)
+        hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
+        if hit:
+            h_try = target - self.t
+        accepted, h_new = st.attempt(self.t, h_try)
+        if accepted:
+            self.n_steps += 1
+            self.t = target if hit else self.t + h_try
+            self.model.write_back(st.q, st.V, self.t)
+            if st.adaptive:
+                self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
             else:
-                self.h = h_new
-                if self.h < 1e-14 * max(1.0, abs(self.t)):
-                    raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+                self.h = h_new if h_new is not None else self.dt
+            if on_step is not None:
+                on_step(self.t, st.q, st.V)
+        else:
+            self.h = h_new
+            if self.h < 1e-14 * max(1.0, abs(self.t)):
+                raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+
+    def advance_to(self, target, on_step=None):
+        """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated
+        within the last step when the method has dense output)."""
+        st = self.stepper
+        if not self.dense:
+            while self.t < target:
+                self._step(target, on_step)
+            return st.q, st.V
+        tol = 1e-12 * max(1.0, abs(target))
+        while self.t < target - tol:
+            self._step(self.t_end, on_step)
+        if abs(self.t - target) <= tol or st.dense is None:
+            return st.q, st.V
+        return st.dense(target)
 
 
 def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
@@ -190,7 +208,7 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
              project=True, rho_inf=0.9, newton_tol=1e-10):
     """Integrate ``model`` over ``t_span`` with a Lie group method through τ.
 
-    method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5" (adaptive: rtol/atol,
+    method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5", "dop853" (adaptive: rtol/atol,
     dt = first step), "scipy:<Name>" (scipy solver inside macro steps of length dt),
     "genalpha" (fixed dt, index-3 constraints, numerical damping ``rho_inf``).
     group: "SE3", "SO3xR3" or "auto"; chart: "exp", "cay" or "auto" (one value or one
@@ -199,7 +217,9 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     ``result.group``/``result.chart`` hold the resolved per-body lists.
     Constrained models with explicit methods are projected onto g = 0 and A V = 0
     after every step (``project=False`` turns this off).
-    t_eval: output times (steps land on them); default: every step.
+    t_eval: output times; default: every step. Fixed-step methods land on them;
+    dopri5 and dop853 interpolate them with their continuous extension (through τ),
+    so output times never shorten their steps.
     """
     t0, t1, q0, V0, t_eval = _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval,
                                            max_steps)
@@ -210,7 +230,7 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=(t0, t1))
     wall0 = time.perf_counter()
-    drv = Driver(model, stepper, dt, t0, q0, V0, max_steps)
+    drv = Driver(model, stepper, dt, t0, q0, V0, max_steps, t_end=t1)
     ts, qs, Vs = [], [], []
     record_all = t_eval is None
     targets = [t1] if record_all else [t for t in t_eval if t > t0]
@@ -226,9 +246,9 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     success, message = True, "reached the end of t_span"
     try:
         for target in targets:
-            drv.advance_to(target, on_step)
+            q_out, V_out = drv.advance_to(target, on_step)
             if not record_all:
-                ts.append(drv.t), qs.append(stepper.q.copy()), Vs.append(stepper.V.copy())
+                ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
         if drv.t < t1:
             drv.advance_to(t1, on_step)
     except StepFailed as exc:

@@ -15,7 +15,7 @@ from lgt_bridge.simulate import Driver, _check_inputs, make_stepper
 
 from .model import ExudynModel
 
-ADAPTIVE = ("dopri5",)
+ADAPTIVE = ("dopri5", "dop853")
 
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
@@ -56,7 +56,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                   None, 1)
     stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                project=project, rho_inf=rho_inf, span=(t0, t1))
-    drv = Driver(model, stepper, dt, t0, model.q0, model.V0)
+    drv = Driver(model, stepper, dt, t0, model.q0, model.V0, t_end=t1)
     sd = mbs.systemData
     failure = []
     wall0 = time.perf_counter()
@@ -65,15 +65,15 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         h = solver.it.currentStepSize
         ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
         try:
-            drv.advance_to(ts + h)
+            q_out, V_out = drv.advance_to(ts + h)
         except StepFailed as exc:
             failure.append(str(exc))
             model.write_back(stepper.q, stepper.V, drv.t)
             solver.it.endTime = drv.t          # stop Exudyn's loop at the last good state
             return True
-        model.write_back(stepper.q, stepper.V, ts + h)
+        model.write_back(q_out, V_out, ts + h)
         if accelerations:      # Exudyn's solution file and acceleration sensors read them
-            sd.SetODE2Coordinates_tt(model.accelerations(stepper.q, stepper.V, ts + h))
+            sd.SetODE2Coordinates_tt(model.accelerations(q_out, V_out, ts + h))
         return True
 
     solver = exu.MainSolverImplicitSecondOrder()

@@ -9,7 +9,7 @@ The residuals before and after are kept for the result's statistics.
 """
 import numpy as np
 
-from .local import LocalProblem
+from .local import make_problem
 
 
 class Projector:
@@ -17,7 +17,7 @@ class Projector:
     def __init__(self, model, tol=1e-12, max_iter=10):
         self.model = model
         self.tol, self.max_iter = tol, max_iter
-        self.prob = LocalProblem(model, "SO3xR3", "exp")
+        self.prob = make_problem(model, "SO3xR3", "exp")
         self.max_before = 0.0
         self.max_after = 0.0
         self.max_vel_after = 0.0

@@ -11,10 +11,12 @@ per rigid body (ω, Rᵀṙ) on SE(3), (ω, ṙ) on SO(3)xR³; vector rates unch
 """
 import numpy as np
 
+from .. import backend as _backend
 from .. import lgt as _lgt
 from ..errors import InputError
 from ..groups import quaternion as _q
 from ..groups._vec import cross
+from .base import StepFailed, first_nonfinite
 
 
 class BodySet:
@@ -52,8 +54,20 @@ def per_body(option, n, name, check):
     return [check(v) for v in vals]
 
 
+def make_problem(model, group="SE3", chart="exp", backend=None):
+    """The local problem on the selected backend (:mod:`lgt_bridge.backend`)."""
+    if _backend.compiled(backend):
+        from .compiled import CompiledProblem
+        return CompiledProblem(model, group, chart)
+    return LocalProblem(model, group, chart)
+
+
 class LocalProblem:
-    """Evaluates the local ODE of a model for the step that starts at q_k."""
+    """Evaluates the local ODE of a model for the step that starts at q_k (numpy
+    reference backend; :class:`~lgt_bridge.integrators.compiled.CompiledProblem` runs
+    the same operations in compiled kernels)."""
+
+    compiled = False
 
     def __init__(self, model, group="SE3", chart="exp"):
         self.model = model
@@ -91,6 +105,13 @@ class LocalProblem:
     @property
     def start_quats(self):
         return [b[2] for b in self.bases]
+
+    def snapshot(self):
+        """The current step's base (restore with :meth:`restore`)."""
+        return self.q_k, self.bases
+
+    def restore(self, snap):
+        self.q_k, self.bases = snap
 
     def configuration(self, X):
         """q = τ(q_k, X) and the quaternion of every body set."""
@@ -157,6 +178,51 @@ class LocalProblem:
         Vd = self.model.f(q, V, t)
         self.n_f += 1
         return Xd, self.group_acceleration(Vd, W, quats), q, V
+
+    # --- the stage API of the explicit steppers (same on both backends) ---------
+    def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
+        """Stage i of a step from t: X = h Σ_{j<i} a_j KX_j, W = W0 + h Σ a_j KW_j,
+        KX[i] = dψ⁻¹_{-X}(W), KW[i] = Ẇ from f at time ts. Returns 0.0, or the largest
+        Cayley |c| (f not called) when it exceeds ``climit``; StepFailed on NaN/inf."""
+        if i == 0:
+            X, W = np.zeros(self.nX), W0
+        else:
+            X = h * (a[:i] @ KX[:i])
+            W = W0 + h * (a[:i] @ KW[:i])
+            c = self.max_cayley(X)
+            if c > climit:
+                return c
+        KX[i], KW[i], q, V = self.rhs(X, W, ts, at_start=i == 0)
+        if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
+            self.stage_failed(KX[i], KW[i], t, ts, q, V)
+        return 0.0
+
+    def start_rates(self, KX, W0):
+        """KX[0] = dψ⁻¹_0(W0) (the first stage's kinematics, no f)."""
+        KX[0] = self.chart_scale * self.to_local(W0)
+
+    def end(self, KX, KW, b, h, W0):
+        """(X1, W1, q1, V1, quats) at the end of a step with weights b (fresh arrays)."""
+        X1 = h * (b @ KX[:len(b)])
+        W1 = W0 + h * (b @ KW[:len(b)])
+        q1, quats = self.configuration(X1)
+        return X1, W1, q1, self.model_velocity(W1, quats), quats
+
+    def state_at(self, X, W):
+        """(q, V) at local state (X, W) of the current step."""
+        q, quats = self.configuration(X)
+        return q, self.model_velocity(W, quats)
+
+    def stage_failed(self, KX, KW, t, ts, q, V):
+        for kind, arr in (("q", q), ("V", V)):
+            if not np.isfinite(arr).all():
+                raise StepFailed(f"non-finite {kind} at t = {ts:.9g} in "
+                                 f"{first_nonfinite(self.layout, kind, arr)}; the model "
+                                 "returned NaN/inf or the step diverged (try a smaller dt).")
+        where = first_nonfinite(self.layout, "V", KW) if not np.isfinite(KW).all() else "the kinematics"
+        raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
+                         f"(stage time {ts:.9g}): the model returned NaN/inf for a "
+                         "finite state. The result keeps every step before it.")
 
     def to_local(self, d):
         """A vector in V's layout as X's layout (bodies: the same 6 numbers; vector part: rates)."""

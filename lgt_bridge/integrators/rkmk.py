@@ -1,10 +1,15 @@
 """Runge-Kutta-Munthe-Kaas: an explicit tableau on the local ODE (X, W) from X = 0,
-q_{k+1} = τ(q_k, X_{k+1}). Fixed step (euler, rkmk2, rkmk4) and Dormand-Prince
-5(4) with an embedded error estimate on (X, W) and a PI step-size controller."""
+q_{k+1} = τ(q_k, X_{k+1}). Fixed step (euler, rkmk2, rkmk4) and embedded pairs
+(Dormand-Prince 5(4), Hairer's DOP853 with its 5th/3rd-order estimate) with error
+control on (X, W), step-size control and dense output: the continuous extension of
+the pair on (X, W) within the step, mapped through τ of the step's own base.
+
+A stage is ``problem.stage(...)``: on the compiled backend two kernel calls around the
+model's f over preallocated buffers (:mod:`lgt_bridge.integrators.compiled`)."""
 import numpy as np
 
 from ..errors import ChartDomainError
-from .base import StepFailed, Stepper, first_nonfinite
+from .base import StepFailed, Stepper
 
 #: a stage whose Cayley coordinates exceed this (|c| = tan(φ/2): φ = 90°) is refused
 CAYLEY_LIMIT = 1.0
@@ -15,50 +20,32 @@ class ExplicitRK(Stepper):
     def __init__(self, problem, tableau, projector=None):
         super().__init__(problem, projector)
         self.tab = tableau
-        self.KX = np.zeros((tableau.stages, problem.nX))
-        self.KW = np.zeros((tableau.stages, problem.nv))
-        self._k1 = None                        # FSAL: the first stage of the next step
+        ns = tableau.stages + (len(tableau.extra[1]) if tableau.extra is not None else 0)
+        # two sets of stage buffers: the last accepted step's stages stay valid for its
+        # dense output while the next step is attempted in the other set
+        self._bufs = [(np.zeros((ns, problem.nX)), np.zeros((ns, problem.nv))) for _ in range(2)]
+        self.KX, self.KW = self._bufs[0]
+        self._A = [np.ascontiguousarray(row, dtype=float) for row in tableau.A]
+        self._b = np.ascontiguousarray(tableau.b, dtype=float)
+        self._fsal = False                     # KW[0] holds the first stage of the next step
+        self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
 
     def set_state(self, q, V, W=None, quats=None):
         super().set_state(q, V, W, quats)
-        self._k1 = None
+        self._fsal = False
 
     def stages(self, t, h):
-        """All stages of one step; returns (X1, W1)."""
+        """All stages of one step; returns (X1, W1, q1, V1, quats) or raises _CayleyLimit."""
         prob, tab, KX, KW = self.prob, self.tab, self.KX, self.KW
-        A, c = tab.A, tab.c
-        X0 = np.zeros(prob.nX)
+        c, W0 = tab.c, self.W
         for i in range(tab.stages):
-            if i == 0:
-                if self._k1 is not None:
-                    KX[0], KW[0] = self._k1
-                else:
-                    KX[0], KW[0], q, V = prob.rhs(X0, self.W, t, at_start=True)
-                    self._check_stage(KX[0], KW[0], t, t, q, V)
+            if i == 0 and self._fsal:
+                prob.start_rates(KX, W0)
                 continue
-            else:
-                X = h * (A[i, :i] @ KX[:i])
-                W = self.W + h * (A[i, :i] @ KW[:i])
-                if prob.max_cayley(X) > CAYLEY_LIMIT:
-                    raise _CayleyLimit(prob.max_cayley(X))
-            KX[i], KW[i], q, V = prob.rhs(X, W, t + c[i] * h)
-            self._check_stage(KX[i], KW[i], t, t + c[i] * h, q, V)
-        X1 = h * (tab.b @ KX)
-        W1 = self.W + h * (tab.b @ KW)
-        return X1, W1
-
-    def _check_stage(self, KX, KW, t, ts, q, V):
-        if not (np.isfinite(KW).all() and np.isfinite(KX).all()):
-            self.check_finite(ts, q, V)
-            where = first_nonfinite(self.prob.layout, "V", KW) if not np.isfinite(KW).all() else "the kinematics"
-            raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
-                             f"(stage time {ts:.9g}): the model returned NaN/inf for a "
-                             "finite state. The result keeps every step before it.")
-
-    def end_state(self, X1, W1):
-        """(q1, V1, W1, quats) at the end of the step."""
-        q1, quats = self.prob.configuration(X1)
-        return q1, self.prob.model_velocity(W1, quats), W1, quats
+            cm = prob.stage(KX, KW, i, self._A[i], h, W0, t, t + c[i] * h, self.climit)
+            if cm:
+                raise _CayleyLimit(cm)
+        return prob.end(KX, KW, self._b, h, W0)
 
 
 class _CayleyLimit(Exception):
@@ -90,7 +77,7 @@ class FixedRK(ExplicitRK):
 
     def attempt(self, t, h):
         try:
-            X1, W1 = self.stages(t, h)
+            X1, W1, q1, V1, quats = self.stages(t, h)
         except _CayleyLimit as lim:
             raise StepFailed(
                 f"Cayley chart at t = {t:.9g}: a stage of the step h = {h:.3g} rotates a body by "
@@ -100,24 +87,31 @@ class FixedRK(ExplicitRK):
         if not (np.isfinite(X1).all() and np.isfinite(W1).all()):
             raise StepFailed(f"non-finite state at t = {t + h:.9g}; reduce dt.")
         self._check_growth(t, h, W1)
-        self.finish(t + h, *self.end_state(X1, W1))
+        self.finish(t + h, q1, V1, W1, quats)
         return True, None      # fixed step: the driver goes back to dt after a shortened landing step
 
 
 class AdaptiveRK(ExplicitRK):
-    """Embedded pair with PI control (Hairer-Wanner's DOPRI5 constants)."""
+    """Embedded pair with step-size control (Hairer-Wanner: PI control for DOPRI5,
+    err^(-1/8) with factors in [1/3, 6] for DOP853) and dense output."""
 
     adaptive = True
-    SAFETY, FACMIN, FACMAX = 0.9, 0.2, 10.0
-    ALPHA, BETA = 0.17, 0.04
+    SAFETY = 0.9
 
     def __init__(self, problem, tableau, rtol, atol, projector=None, first_step=None):
         super().__init__(problem, tableau, projector)
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
         self._err_prev = 1e-4
+        self.ALPHA, self.BETA, self.FACMIN, self.FACMAX = tableau.control
         self._facmax = self.FACMAX
-        self.db = tableau.b - tableau.b_err
+        e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
+        self._e5 = np.ascontiguousarray(e5, dtype=float)
+        self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
+        self._n = problem.nX + problem.nv
+        self.dense = None                      # DenseStep of the last accepted step
+        self.dense_capable = tableau.dense
+        self._errsums = _error_sums_kernel() if problem.compiled else _error_sums
 
     def _norm(self, y, scale):
         return float(np.sqrt(np.mean((y / scale) ** 2)))
@@ -133,21 +127,26 @@ class AdaptiveRK(ExplicitRK):
         h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
         KX1, KW1, _, _ = prob.rhs(h0 * KX, self.W + h0 * KW, t + h0)
         d2 = self._norm(np.concatenate([KX1, KW1]) - f0, sc) / h0
-        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 5)
+        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / (self.tab.err_order))
         return min(100 * h0, h1)
 
+    def error_norm(self, h, X1, W1):
+        s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
+        if self.tab.e3 is None:
+            return abs(h) * np.sqrt(s5 / self._n)
+        if s5 == 0.0 and s3 == 0.0:
+            return 0.0
+        return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * self._n)
+
     def attempt(self, t, h):
-        prob, tab = self.prob, self.tab
+        tab = self.tab
         try:
-            X1, W1 = self.stages(t, h)
+            X1, W1, q1, V1, quats = self.stages(t, h)
         except _CayleyLimit:
             self.n_rejected += 1
             self._facmax = 1.0
             return False, 0.25 * h
-        err = h * np.concatenate([self.db @ self.KX, self.db @ self.KW])
-        y1 = np.concatenate([X1, W1])
-        scale = self.atol + self.rtol * np.maximum(np.abs(np.concatenate([np.zeros(prob.nX), self.W])), np.abs(y1))
-        en = self._norm(err, scale)
+        en = self.error_norm(h, X1, W1)
         if not np.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
@@ -156,11 +155,106 @@ class AdaptiveRK(ExplicitRK):
             fac = min(self._facmax, max(self.FACMIN, fac))
             self._err_prev = max(en, 1e-4)
             self._facmax = self.FACMAX
-            k_last = (self.KX[-1].copy(), self.KW[-1].copy())
-            self.finish(t + h, *self.end_state(X1, W1))
+            if self.dense_capable:
+                self.dense = DenseStep(self, t, h, X1, W1)
+            i_last = tab.stages - 1
+            self.finish(t + h, q1, V1, W1, quats)
+            # the stage buffers alternate: the dense output keeps the accepted step's stages
+            other = self._bufs[1] if self.KX is self._bufs[0][0] else self._bufs[0]
             if tab.fsal and self.projector is None:
-                self._k1 = (prob.chart_scale * prob.to_local(self.W), k_last[1])
+                other[1][0] = self.KW[i_last]
+                self._fsal = True
+            self.KX, self.KW = other
             return True, h * fac
         self.n_rejected += 1
         self._facmax = 1.0
-        return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.order))
+        return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.err_order))
+
+
+def _error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
+    """numpy reference of kernels.stage.error_sums."""
+    ns = len(e5)
+    sc = np.concatenate([atol + rtol * np.abs(X1), atol + rtol * np.maximum(np.abs(W0), np.abs(W1))])
+    err5 = np.concatenate([e5 @ KX[:ns], e5 @ KW[:ns]]) / sc
+    err3 = np.concatenate([e3 @ KX[:ns], e3 @ KW[:ns]]) / sc
+    return float(err5 @ err5), float(err3 @ err3)
+
+
+def _error_sums_kernel():
+    from ..kernels.stage import error_sums
+    return error_sums
+
+
+class DenseStep:
+    """Continuous extension of one accepted step on (X, W), evaluated through τ of the
+    step's own base (so it stays valid after the stepper has moved on). DOP853's three
+    extra stages are computed on the first evaluation."""
+
+    def __init__(self, stepper, t, h, X1, W1):
+        self.st, self.t0, self.h = stepper, t, h
+        self.t1 = t + h
+        self.KX, self.KW = stepper.KX, stepper.KW
+        self.W0, self.X1, self.W1 = stepper.W, X1, W1
+        self.base = stepper.prob.snapshot()
+        self.q1, self.V1 = None, None
+        self._F = None
+
+    def _coefficients(self):
+        tab, prob, st = self.st.tab, self.st.prob, self.st
+        h, KX, KW = self.h, self.KX, self.KW
+        if tab.P is not None:
+            P = tab.P
+            return ("P", h * (P.T @ KX[:len(P)]), h * (P.T @ KW[:len(P)]))
+        A, c = tab.extra
+        ns = tab.stages
+        snap = prob.snapshot()
+        prob.restore(self.base)
+        try:
+            for k in range(len(c)):
+                s = ns + k
+                a = np.ascontiguousarray(A[k][:s])
+                cm = prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)
+                if cm:   # pragma: no cover - no limit passed
+                    raise StepFailed("dense output: Cayley limit")
+        finally:
+            prob.restore(snap)
+        n = ns + len(c)
+        out = []
+        for K, y1, y0 in ((KX[:n], self.X1, 0.0), (KW[:n], self.W1, self.W0)):
+            dy = y1 - y0
+            F = np.empty((7, K.shape[1]))
+            F[0] = dy
+            F[1] = h * K[0] - dy
+            F[2] = 2 * dy - h * (K[ns - 1] + K[0])
+            F[3:] = h * (tab.D @ K)
+            out.append(F)
+        return ("D", out[0], out[1])
+
+    def __call__(self, t):
+        """(q, V) at t in [t0, t1] (τ of the step's base)."""
+        if self._F is None:
+            self._F = self._coefficients()
+        th = (t - self.t0) / self.h
+        kind, FX, FW = self._F
+        if kind == "P":
+            pw = np.cumprod(np.full(FX.shape[0], th))
+            X, W = pw @ FX, self.W0 + pw @ FW
+        else:
+            X, W = _dop853_eval(FX, th), self.W0 + _dop853_eval(FW, th)
+        prob = self.st.prob
+        snap = prob.snapshot()
+        prob.restore(self.base)
+        try:
+            q, V = prob.state_at(X, W)
+        finally:
+            prob.restore(snap)
+        return q, V
+
+
+def _dop853_eval(F, x):
+    """Hairer's contd8 polynomial: y - y_0 at θ = x."""
+    y = np.zeros(F.shape[1])
+    for i, f in enumerate(F[::-1]):
+        y += f
+        y *= x if i % 2 == 0 else 1.0 - x
+    return y

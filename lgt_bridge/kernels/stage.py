@@ -1,0 +1,232 @@
+"""Stage kernels of the explicit steppers, over every body of a model in one call.
+
+A model's bodies are described by an int64 table ``bt`` (one row per rigid body, see
+:func:`body_table`) and its vector-space coordinates by ``vt`` (rows ``(iq, iv, ix)``).
+One stage of an RKMK method is
+
+    stage_state:       X = h Σ a_j KX_j,  W = W_0 + h Σ a_j KW_j,  q = τ(q_k, X),
+                       V = model velocity of W,  KX_i = dψ⁻¹_{-X}(W)
+    the model's f:     V̇ = f(q, V, t)
+    stage_derivative:  KW_i = Ẇ from V̇ (SE(3): Rᵀr̈ - ω × Rᵀṙ), finiteness of KX_i, KW_i
+
+The numpy reference is :class:`lgt_bridge.integrators.local.LocalProblem` (τ from
+``lgt.LGT.tau_pose``, rates from the ``groups`` modules); tests hold the two equal.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from .rotations import c3, cross, dser, eser, from_quat, gibbs_minus_one, qmul, rotate, rotvec_minus_one, to_quat
+
+# columns of the body table
+PARAM, SE3, CAY, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
+NCOL = 19
+
+
+def body_table(sets, codes):
+    """The int64 body table of a LocalProblem's body sets (``codes``: parameterization
+    name -> kernel code)."""
+    rows = []
+    for s in sets:
+        code = codes[s.lgt.param.name]
+        for k in range(len(s.ids)):
+            row = np.full(NCOL, -1, np.int64)
+            row[PARAM], row[SE3], row[CAY], row[ROT_ONLY] = code, int(s.se3), int(s.cay), int(s.rot_only)
+            row[XOFF] = s.xidx[k, 0]
+            nrot = s.lgt.param.nrot
+            row[NROT] = nrot
+            qi = s.qidx[k]
+            if s.rot_only:
+                row[ROT:ROT + nrot] = qi
+            else:
+                row[POS:POS + 3] = qi[:3]
+                row[ROT:ROT + nrot] = qi[3:]
+            row[TWIST:TWIST + len(s.vidx[k])] = s.vidx[k]
+            rows.append(row)
+    return np.array(rows, np.int64).reshape(-1, NCOL)
+
+
+@njit(cache=True)
+def bases(bt, q, pk):
+    """pk[b] = α(q) of every body (unit quaternion, scalar first)."""
+    for b in range(bt.shape[0]):
+        o = ROT
+        r3 = q[bt[b, o + 3]] if bt[b, NROT] == 4 else 0.0
+        p0, p1, p2, p3 = to_quat(bt[b, PARAM], q[bt[b, o]], q[bt[b, o + 1]], q[bt[b, o + 2]], r3)
+        pk[b, 0], pk[b, 1], pk[b, 2], pk[b, 3] = p0, p1, p2, p3
+
+
+@njit(cache=True)
+def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
+    """Stage combination, τ, model velocity and local kinematics of every body.
+    ``ns = 0``: the step's start (X = 0, q = q_k). Returns the largest |c| of the
+    Cayley-chart bodies (a half-turn is |c| -> ∞)."""
+    nX, nv = X.shape[0], W.shape[0]
+    for j in range(nX):
+        s = 0.0
+        for i in range(ns):
+            s += a[i] * KX[i, j]
+        X[j] = h * s
+    for j in range(nv):
+        s = 0.0
+        for i in range(ns):
+            s += a[i] * KW[i, j]
+        W[j] = W0[j] + h * s
+    cmax = 0.0
+    for b in range(bt.shape[0]):
+        se3, cay, ro, xo = bt[b, SE3] == 1, bt[b, CAY] == 1, bt[b, ROT_ONLY] == 1, bt[b, XOFF]
+        nrot = bt[b, NROT]
+        x0, x1, x2 = X[xo], X[xo + 1], X[xo + 2]
+        k0, k1, k2, k3 = pk[b, 0], pk[b, 1], pk[b, 2], pk[b, 3]
+        phi, sh = 0.0, 1.0
+        if cay:
+            d0, d1, d2, d3 = gibbs_minus_one(x0, x1, x2)
+            cmax = max(cmax, math.sqrt(x0 * x0 + x1 * x1 + x2 * x2))
+        else:
+            d0, d1, d2, d3, phi, sh = rotvec_minus_one(x0, x1, x2)
+        if ns == 0:
+            p0, p1, p2, p3 = k0, k1, k2, k3
+            for c in range(3):
+                if not ro:
+                    q[bt[b, POS + c]] = qk[bt[b, POS + c]]
+            for c in range(nrot):
+                q[bt[b, ROT + c]] = qk[bt[b, ROT + c]]
+        else:
+            m0, m1, m2, m3 = qmul(k0, k1, k2, k3, d0, d1, d2, d3)
+            p0, p1, p2, p3 = k0 + m0, k1 + m1, k2 + m2, k3 + m3
+            r = ROT
+            prev3 = qk[bt[b, r + 3]] if nrot == 4 else 0.0
+            o0, o1, o2, o3 = from_quat(bt[b, PARAM], p0, p1, p2, p3, qk[bt[b, r]], qk[bt[b, r + 1]],
+                                       qk[bt[b, r + 2]], prev3)
+            q[bt[b, r]], q[bt[b, r + 1]], q[bt[b, r + 2]] = o0, o1, o2
+            if nrot == 4:
+                q[bt[b, r + 3]] = o3
+            if not ro:
+                y0, y1, y2 = X[xo + 3], X[xo + 4], X[xo + 5]
+                if se3:
+                    if cay:
+                        v0, v1, v2 = rotate(1.0 + d0, d1, d2, d3, y0, y1, y2)
+                        t0, t1, t2 = y0 + v0, y1 + v1, y2 + v2
+                    else:
+                        xy0, xy1, xy2 = cross(x0, x1, x2, y0, y1, y2)
+                        xx0, xx1, xx2 = cross(x0, x1, x2, xy0, xy1, xy2)
+                        f1, f2 = 0.5 * sh * sh, c3(phi)
+                        t0, t1, t2 = y0 + f1 * xy0 + f2 * xx0, y1 + f1 * xy1 + f2 * xx1, y2 + f1 * xy2 + f2 * xx2
+                    y0, y1, y2 = rotate(k0, k1, k2, k3, t0, t1, t2)
+                i0, i1, i2 = bt[b, POS], bt[b, POS + 1], bt[b, POS + 2]
+                q[i0], q[i1], q[i2] = qk[i0] + y0, qk[i1] + y1, qk[i2] + y2
+        p[b, 0], p[b, 1], p[b, 2], p[b, 3] = p0, p1, p2, p3
+        # velocities and local kinematics
+        tw = TWIST
+        w0, w1, w2 = W[bt[b, tw]], W[bt[b, tw + 1]], W[bt[b, tw + 2]]
+        V[bt[b, tw]], V[bt[b, tw + 1]], V[bt[b, tw + 2]] = w0, w1, w2
+        xw0, xw1, xw2 = cross(x0, x1, x2, w0, w1, w2)
+        if cay:
+            cw = x0 * w0 + x1 * w1 + x2 * w2
+            Xd[xo], Xd[xo + 1], Xd[xo + 2] = (0.5 * (w0 + xw0 + cw * x0), 0.5 * (w1 + xw1 + cw * x1),
+                                              0.5 * (w2 + xw2 + cw * x2))
+            dd = 0.0
+        else:
+            dd = dser(phi)
+            xxw0, xxw1, xxw2 = cross(x0, x1, x2, xw0, xw1, xw2)
+            Xd[xo], Xd[xo + 1], Xd[xo + 2] = (w0 + 0.5 * xw0 + dd * xxw0, w1 + 0.5 * xw1 + dd * xxw1,
+                                              w2 + 0.5 * xw2 + dd * xxw2)
+        if ro:
+            continue
+        j0, j1, j2 = bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
+        u0, u1, u2 = W[j0], W[j1], W[j2]
+        if se3:
+            V[j0], V[j1], V[j2] = rotate(p0, p1, p2, p3, u0, u1, u2)
+            y0, y1, y2 = X[xo + 3], X[xo + 4], X[xo + 5]
+            yw0, yw1, yw2 = cross(y0, y1, y2, w0, w1, w2)
+            if cay:
+                z0, z1, z2 = u0 + yw0, u1 + yw1, u2 + yw2
+                cz0, cz1, cz2 = cross(x0, x1, x2, z0, z1, z2)
+                Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = 0.5 * (z0 + cz0), 0.5 * (z1 + cz1), 0.5 * (z2 + cz2)
+            else:
+                xu0, xu1, xu2 = cross(x0, x1, x2, u0, u1, u2)
+                xxu0, xxu1, xxu2 = cross(x0, x1, x2, xu0, xu1, xu2)
+                xyw0, xyw1, xyw2 = cross(x0, x1, x2, yw0, yw1, yw2)
+                yxw0, yxw1, yxw2 = cross(y0, y1, y2, xw0, xw1, xw2)
+                ee = eser(phi) * (x0 * y0 + x1 * y1 + x2 * y2)
+                Xd[xo + 3] = u0 + 0.5 * (xu0 + yw0) + dd * (xxu0 + xyw0 + yxw0) + ee * xxw0
+                Xd[xo + 4] = u1 + 0.5 * (xu1 + yw1) + dd * (xxu1 + xyw1 + yxw1) + ee * xxw1
+                Xd[xo + 5] = u2 + 0.5 * (xu2 + yw2) + dd * (xxu2 + xyw2 + yxw2) + ee * xxw2
+        else:
+            V[j0], V[j1], V[j2] = u0, u1, u2
+            Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = u0, u1, u2
+    for k in range(vt.shape[0]):
+        iq, iv, ix = vt[k, 0], vt[k, 1], vt[k, 2]
+        q[iq] = qk[iq] + X[ix]
+        V[iv] = W[iv]
+        Xd[ix] = W[iv]
+    return cmax
+
+
+@njit(cache=True)
+def convert(mode, src, W, p, bt, out):
+    """Velocity representations of SE(3) bodies (other entries copied):
+    mode 0: W -> V (u -> R u);  1: V -> W (ṙ -> Rᵀ ṙ);
+    mode 2: V̇ -> Ẇ (Rᵀ r̈ - ω × u);  3: Ẇ -> V̇ (R (u̇ + ω × u))."""
+    for j in range(src.shape[0]):
+        out[j] = src[j]
+    for b in range(bt.shape[0]):
+        if bt[b, SE3] != 1 or bt[b, ROT_ONLY] == 1:
+            continue
+        tw = TWIST
+        j0, j1, j2 = bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
+        p0, p1, p2, p3 = p[b, 0], p[b, 1], p[b, 2], p[b, 3]
+        s0, s1, s2 = src[j0], src[j1], src[j2]
+        if mode == 0:
+            out[j0], out[j1], out[j2] = rotate(p0, p1, p2, p3, s0, s1, s2)
+            continue
+        if mode == 1:
+            out[j0], out[j1], out[j2] = rotate(p0, -p1, -p2, -p3, s0, s1, s2)
+            continue
+        c0, c1, c2 = cross(W[bt[b, tw]], W[bt[b, tw + 1]], W[bt[b, tw + 2]], W[j0], W[j1], W[j2])
+        if mode == 2:
+            r0, r1, r2 = rotate(p0, -p1, -p2, -p3, s0, s1, s2)
+            out[j0], out[j1], out[j2] = r0 - c0, r1 - c1, r2 - c2
+        else:
+            out[j0], out[j1], out[j2] = rotate(p0, p1, p2, p3, s0 + c0, s1 + c1, s2 + c2)
+
+
+@njit(cache=True)
+def stage_derivative(Vd, W, p, bt, KW, KX, i):
+    """KW[i] = Ẇ from the model's V̇; True when KX[i] and KW[i] are finite."""
+    row = KW[i]
+    convert(2, Vd, W, p, bt, row)
+    ok = True
+    for j in range(row.shape[0]):
+        if not math.isfinite(row[j]):
+            ok = False
+    for j in range(KX.shape[1]):
+        if not math.isfinite(KX[i, j]):
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
+    """Σ (Σ_i e5_i K_i / sc)² and the same with e3, over y = (X, W), with the scale
+    sc = atol + rtol·max(|y_k|, |y_{k+1}|) (X_k = 0)."""
+    s5, s3 = 0.0, 0.0
+    ns = e5.shape[0]
+    for j in range(X1.shape[0]):
+        a5, a3 = 0.0, 0.0
+        for i in range(ns):
+            a5 += e5[i] * KX[i, j]
+            a3 += e3[i] * KX[i, j]
+        sc = atol + rtol * abs(X1[j])
+        s5 += (a5 / sc) ** 2
+        s3 += (a3 / sc) ** 2
+    for j in range(W1.shape[0]):
+        a5, a3 = 0.0, 0.0
+        for i in range(ns):
+            a5 += e5[i] * KW[i, j]
+            a3 += e3[i] * KW[i, j]
+        sc = atol + rtol * max(abs(W0[j]), abs(W1[j]))
+        s5 += (a5 / sc) ** 2
+        s3 += (a3 / sc) ** 2
+    return s5, s3
