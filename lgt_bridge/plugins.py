@@ -8,8 +8,6 @@ An adapter package registers an object with two functions:
 ``lgt_bridge.wrap(obj)`` asks every registered adapter in turn. The core never
 imports an engine: an adapter is loaded only when ``wrap`` needs it.
 """
-from importlib.metadata import entry_points
-
 from .errors import InputError
 from .model import Model
 
@@ -17,7 +15,8 @@ GROUP = "lgt_bridge.adapters"
 
 
 def adapters():
-    """The registered adapter entry points, by name."""
+    """The registered adapter entry points, by name (scanned on call, not at import)."""
+    from importlib.metadata import entry_points
     return {ep.name: ep for ep in entry_points(group=GROUP)}
 
 

@@ -10,11 +10,9 @@ from .errors import ChartDomainError, InputError, StepError
 from .integrators import METHODS
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector
-from .integrators.genalpha import GenAlpha
 from .integrators.local import make_problem
 from .integrators.rkmk import AdaptiveRK, FixedRK
 from .integrators.tableaux import ADAPTIVE, FIXED
-from .integrators.vector_space import ScipyStepper
 
 _SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
@@ -140,7 +138,9 @@ def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6,
     if method in ADAPTIVE:
         return AdaptiveRK(prob, ADAPTIVE[method](), rtol, atol, projector, first_step=dt), dt
     if method == "genalpha":
+        from .integrators.genalpha import GenAlpha
         return GenAlpha(prob, rho_inf=rho_inf, newton_tol=newton_tol), dt
+    from .integrators.vector_space import ScipyStepper
     stepper = ScipyStepper(prob, method[6:], rtol, atol, projector)
     if dt is None:
         wmax = max([np.abs(model.V0[list(b.twist[:3])]).max() for b in model.layout.bodies] + [1e-12])

@@ -152,3 +152,14 @@ def test_unknown_backend_is_refused(monkeypatch):
     monkeypatch.setenv("LGT_BRIDGE_BACKEND", "fortran")
     with pytest.raises(InputError, match="LGT_BRIDGE_BACKEND"):
         simulate(scenes.free_body(), (0, 0.01), method="rkmk4", dt=1e-3)
+
+
+def test_import_loads_no_numba_scipy_solvers_or_adapters():
+    """`import lgt_bridge` stays light: numba, scipy.integrate/linalg and the adapters'
+    entry points are loaded when first used (a subprocess sees a clean interpreter)."""
+    import subprocess
+    import sys
+    code = ("import sys, lgt_bridge; print(sorted(m for m in ('numba', 'scipy.integrate', 'scipy.linalg', "
+            "'lgt_exudyn', 'lgt_pinocchio', 'exudyn', 'pinocchio', 'importlib.metadata') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]", out

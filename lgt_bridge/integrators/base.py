@@ -1,4 +1,6 @@
 """What every stepper shares: the local problem, the state, failure reporting."""
+import math
+
 import numpy as np
 
 from ..errors import StepError
@@ -28,15 +30,18 @@ class Stepper:
         self.n_rejected = 0
         self.n_newton = 0
 
-    def set_state(self, q, V, W=None, quats=None):
+    def set_state(self, q, V, W=None, quats=None, copy=True):
         """Start (or restart) from model coordinates (q, V); a step that ends at (q, V)
-        passes its W and body quaternions along so they need not be recomputed."""
-        self.q = np.array(q, float)
+        passes its W and body quaternions along so they need not be recomputed
+        (``copy=False``: q and V are fresh arrays the stepper may keep)."""
+        self.q = np.array(q, float) if copy else q
         self.prob.start(self.q, quats)
-        self.V = np.array(V, float)
+        self.V = np.array(V, float) if copy else V
         self.W = self.prob.group_velocity(self.V, self.prob.start_quats) if W is None else W
 
     def check_finite(self, t, q, V):
+        if math.isfinite(q.dot(q) + V.dot(V)):       # one reduction; inf/NaN propagate
+            return
         for kind, arr in (("q", q), ("V", V)):
             if not np.isfinite(arr).all():
                 raise StepFailed(f"non-finite {kind} at t = {t:.9g} in "
@@ -49,4 +54,4 @@ class Stepper:
         if self.projector is not None:
             q1, V1 = self.projector(q1, V1)
             W1 = quats = None
-        self.set_state(q1, V1, W1, quats)
+        self.set_state(q1, V1, W1, quats, copy=False)

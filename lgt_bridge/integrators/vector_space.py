@@ -2,7 +2,6 @@
 integrates the local ODE (X, W) over one macro step from X = 0; q is rebuilt
 through τ. Multistep solvers (BDF, LSODA) are restarted every macro step."""
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .base import StepFailed, Stepper
 from .rkmk import CAYLEY_LIMIT
@@ -26,6 +25,7 @@ class ScipyStepper(Stepper):
         return np.concatenate([KX, KW])
 
     def attempt(self, t, h):
+        from scipy.integrate import solve_ivp      # imported on first use: import lgt_bridge stays fast
         prob = self.prob
         y0 = np.concatenate([np.zeros(prob.nX), self.W])
         sol = solve_ivp(self._fun, (t, t + h), y0, method=self.name, rtol=self.rtol, atol=self.atol)

@@ -28,7 +28,7 @@ TWO_PI = 2.0 * math.pi
 GIMBAL_TOL = 1e-9
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _horner(coef, lim, p2):
     n = 1
     while p2 > lim[n - 1]:
@@ -39,21 +39,21 @@ def _horner(coef, lim, p2):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sinc(phi):
     if phi >= SERIES_MAX:
         return math.sin(phi) / phi
     return _horner(_SINC, _L_SINC, phi * phi)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def c3(phi):
     if phi >= SERIES_MAX:
         return (phi - math.sin(phi)) / phi ** 3
     return _horner(_C3, _L_C3, phi * phi)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dser(phi):
     if phi >= SERIES_MAX:
         h = 0.5 * phi
@@ -61,7 +61,7 @@ def dser(phi):
     return _horner(_D, _L_D, phi * phi)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eser(phi):
     if phi >= SERIES_MAX:
         h = 0.5 * phi
@@ -70,12 +70,12 @@ def eser(phi):
     return _horner(_E, _L_E, phi * phi)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
     return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
             a0 * b1 + b0 * a1 + a2 * b3 - a3 * b2,
@@ -83,7 +83,7 @@ def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
             a0 * b3 + b0 * a3 + a1 * b2 - a2 * b1)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rotate(p0, p1, p2, p3, v0, v1, v2):
     """R(p) v = v + 2 p0 (p x v) + 2 p x (p x v)  (quaternion._rotate)."""
     t0, t1, t2 = cross(p1, p2, p3, v0, v1, v2)
@@ -92,7 +92,7 @@ def rotate(p0, p1, p2, p3, v0, v1, v2):
     return v0 + p0 * t0 + u0, v1 + p0 * t1 + u1, v2 + p0 * t2 + u2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rotvec_minus_one(x0, x1, x2):
     """exp chart quaternion - 1 without cancellation; also returns φ and sinc(φ/2)."""
     phi = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
@@ -101,14 +101,14 @@ def rotvec_minus_one(x0, x1, x2):
     return -2.0 * s * s, 0.5 * sh * x0, 0.5 * sh * x1, 0.5 * sh * x2, phi, sh
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gibbs_minus_one(c0, c1, c2):
     c2n = c0 * c0 + c1 * c1 + c2 * c2
     s = math.sqrt(1.0 + c2n)
     return -c2n / (s * (1.0 + s)), c0 / s, c1 / s, c2 / s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def to_quat(code, r0, r1, r2, r3):
     """Scalar-first unit quaternion of rotation coordinates (r0, r1, r2[, r3])."""
     if code == 0:
@@ -127,12 +127,12 @@ def to_quat(code, r0, r1, r2, r3):
             casb * cc - sacb * sc, cacb * sc + sasb * cc)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _shift(a, prev):
     return a + TWO_PI * np.rint((prev - a) * (1.0 / TWO_PI))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def from_quat(code, p0, p1, p2, p3, q0, q1, q2, q3):
     """α⁻¹ on the rotation: the coordinates of p (4-tuple; the last unused for 3-parameter
     sets) on the branch continuous with the previous coordinates (q0, q1, q2[, q3])

@@ -47,7 +47,7 @@ def body_table(sets, codes):
     return np.array(rows, np.int64).reshape(-1, NCOL)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bases(bt, q, pk):
     """pk[b] = α(q) of every body (unit quaternion, scalar first)."""
     for b in range(bt.shape[0]):
@@ -57,7 +57,7 @@ def bases(bt, q, pk):
         pk[b, 0], pk[b, 1], pk[b, 2], pk[b, 3] = p0, p1, p2, p3
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     """Stage combination, τ, model velocity and local kinematics of every body.
     ``ns = 0``: the step's start (X = 0, q = q_k). Returns the largest |c| of the
@@ -164,7 +164,7 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     return cmax
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def convert(mode, src, W, p, bt, out):
     """Velocity representations of SE(3) bodies (other entries copied):
     mode 0: W -> V (u -> R u);  1: V -> W (ṙ -> Rᵀ ṙ);
@@ -192,7 +192,7 @@ def convert(mode, src, W, p, bt, out):
             out[j0], out[j1], out[j2] = rotate(p0, p1, p2, p3, s0 + c0, s1 + c1, s2 + c2)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stage_derivative(Vd, W, p, bt, KW, KX, i):
     """KW[i] = Ẇ from the model's V̇; True when KX[i] and KW[i] are finite."""
     row = KW[i]
@@ -207,7 +207,7 @@ def stage_derivative(Vd, W, p, bt, KW, KX, i):
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
     """Σ (Σ_i e5_i K_i / sc)² and the same with e3, over y = (X, W), with the scale
     sc = atol + rtol·max(|y_k|, |y_{k+1}|) (X_k = 0)."""
