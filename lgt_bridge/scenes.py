@@ -11,6 +11,7 @@ or "rxyz" for the absolute rotation coordinates.
 """
 import numpy as np
 
+from . import backend as _backend
 from . import params as _params
 from .errors import InputError
 from .groups import quaternion as _q
@@ -18,6 +19,15 @@ from .groups._vec import cross, hat
 from .model import Layout, Model
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
+_KS = None          # lgt_bridge.kernels.scene, imported by the first compiled scene
+
+
+def _kernels():
+    global _KS
+    if _KS is None:
+        from .kernels import scene
+        _KS = scene
+    return _KS
 
 
 class RigidBodySystem(Model):
@@ -31,6 +41,13 @@ class RigidBodySystem(Model):
     s_j of body j (body frames), j = -1 for ground (s_j a ground point).
     springs: ``(i, s_i, j, s_j, k, d)`` zero-length spring-dampers between points.
     load: optional ``load(t, q, V) -> (forces (N,3) inertial, torques (N,3) body)``.
+
+    The backend (:mod:`lgt_bridge.backend`) is fixed when the scene is built: with numba,
+    ``f`` and the joints' ``constraints``, ``constraint_jacobian`` and ``constraint_gamma``
+    run compiled kernels (:mod:`lgt_bridge.kernels.scene`) over tables packed here, so
+    masses, inertias, gravity, pivots, springs and joints are read once; ``load`` (called from
+    Python) may be set or replaced later. The numpy methods ``_f_numpy`` etc. stay the
+    reference.
     """
 
     def __init__(self, masses, inertias, q0, V0, *, param="quat", gravity=GRAVITY,
@@ -69,6 +86,17 @@ class RigidBodySystem(Model):
         Minv[:, 3:, 3:] = np.eye(3) / self.m[:, None, None]
         Minv[self.pivot, 3:, 3:] = 0.0            # a pivot's translation is held
         self._Minv = Minv
+        self.compiled = _backend.compiled()
+        if self.compiled:
+            self._pack()
+
+    def _pack(self):
+        """Kernel tables and work buffers, allocated once (numba is imported here)."""
+        from .kernels.rotations import PARAM_CODES
+        self._kI, self._kF = _kernels().pack(PARAM_CODES[self.param.name], self.param.nrot, self.m, self.J,
+                                             self.Jinv, self.pivot, self.c, self.g, self.springs, self.joints)
+        self._kload = np.zeros((self.nb, 6))
+        self._knoload = np.zeros((0, 6))
 
     # --- kinematics ------------------------------------------------------------
     def _poses(self, q):
@@ -124,44 +152,111 @@ class RigidBodySystem(Model):
             torque = torque + T
         return np.concatenate([torque, force], axis=1).ravel()
 
-    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos):
-        """M c_acc + C_t c_vel + K_t c_pos for generalized-α: the exact gyroscopic damping
-        ∂(ω × Jω)/∂ω = ω~J - (Jω)~ and the springs' damping and stiffness (a stiff spring
-        needs its K_t for Newton to converge); the gravity moment and the joint geometry
-        are left to Newton's iterations (modified Newton)."""
-        W = V.reshape(self.nb, 6)
+    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos, lam=None, sparse=False):
+        """M c_acc + C_t c_vel + K_t c_pos for generalized-α, in V = (ω body, ṙ inertial) and
+        the increments z = (δθ body, δr inertial) of SO(3)xR³, with C_t = -∂Q/∂V and
+        K_t = ∂(Aᵀλ - Q)/∂z: the gyroscopic damping ∂(ω × Jω)/∂ω = ω~J - (Jω)~, the gravity
+        moment of a pivoted body (δ(Rᵀg) = (Rᵀg)~ δθ), the springs' damping and stiffness
+        (a stiff spring needs its K_t for Newton to converge) and, given the joint forces
+        ``lam``, the joints' geometric stiffness: (Aᵀλ)_i = s̃_i R_iᵀλ on body i's ω rows,
+        so ∂/∂θ_i = s̃_i (R_iᵀλ)~ (the negative on body j). Without ``lam`` that term is
+        left to Newton's iterations. ``sparse=True``: a scipy.sparse CSR matrix (one 6x6
+        block per body and per spring pair) instead of a dense array."""
+        nb = self.nb
+        W = V.reshape(nb, 6)
         w = W[:, :3]
         Jw = np.einsum("nij,nj->ni", self.J, w)
-        Ct = np.zeros((self.nb, 6, 6))
-        Ct[:, :3, :3] = hat(w) @ self.J - hat(Jw)
-        out = self.mass_matrix(q) * c_acc
-        idx = np.arange(self.nb)
-        blocks = out.reshape(self.nb, 6, self.nb, 6)
-        blocks[idx, :, idx, :] += c_vel * Ct
-        out = blocks.reshape(6 * self.nb, 6 * self.nb)
+        B = np.zeros((nb, 6, 6))
+        B[:, :3, :3] = c_acc * self.J + c_vel * (hat(w) @ self.J - hat(Jw))
+        B[:, 3:, 3:] = (c_acc * self.m)[:, None, None] * np.eye(3)
+        need_R = self.pivot.any() or (lam is not None and self.n_constraints)
+        R = self._poses(q)[1] if need_R and c_pos else None
+        if R is not None and self.pivot.any():
+            pv = self.pivot
+            Rtg = np.einsum("nji,j->ni", R[pv], self.g)
+            B[pv, :3, :3] -= c_pos * self.m[pv, None, None] * (hat(self.c[pv]) @ hat(Rtg))
+        if R is not None and lam is not None and self.n_constraints:
+            L = np.asarray(lam, float).reshape(-1, 3)
+            rot = B[:, :3, :3]
+            Gi = hat(self._si) @ hat(np.einsum("nji,nj->ni", R[self._ji], L))
+            np.add.at(rot, self._ji, c_pos * Gi)
+            body = ~self._ground
+            if body.any():
+                jj = self._jj[body]
+                Gj = hat(self._sj[body]) @ hat(np.einsum("nji,nj->ni", R[jj], L[body]))
+                np.add.at(rot, jj, -c_pos * Gj)
+        ii = 6 * np.arange(nb)[:, None] + np.arange(6)
+        rows = np.broadcast_to(ii[:, :, None], B.shape).ravel()
+        cols = np.broadcast_to(ii[:, None, :], B.shape).ravel()
+        if sparse:
+            from scipy import sparse as _sp
+            out = _sp.csr_matrix((B.ravel(), (rows, cols)), shape=(6 * nb, 6 * nb))
+            return out + self._spring_matrix(q, c_vel, c_pos, sparse=True, V=V) if self.springs else out
+        out = np.zeros((6 * nb, 6 * nb))
+        out[rows, cols] = B.ravel()
         if self.springs:
-            out += self._spring_matrix(q, c_vel, c_pos)
+            out += self._spring_matrix(q, c_vel, c_pos, V=V)
         return out
 
-    def _spring_matrix(self, q, c_vel, c_pos):
+    def _spring_matrix(self, q, c_vel, c_pos, sparse=False, V=None):
         """Springs' damping c_vel·d DᵀD and stiffness c_pos·(k DᵀD - s̃ (RᵀF)~) in the
         local increments (δθ body, δr inertial) of SO(3)xR³: with D_i = [-R_i s̃_i, I]
-        the point's variation δp_i = D_i δz_i, and δ(Rᵀ F) = (RᵀF)~ δθ."""
+        the point's variation δp_i = D_i δz_i, and δ(Rᵀ F) = (RᵀF)~ δθ. With velocities V
+        the damping force enters F and its point velocity v_i = ṙ_i + R_i (ω_i × s_i) moves
+        with the rotation, δv_i = -R_i (ω_i × s_i)~ δθ_i (V = None: at rest).
+        ``sparse=True``: a scipy.sparse CSR matrix."""
         r, R = self._poses(q)
-        out = np.zeros((6 * self.nb, 6 * self.nb))
+        Vb = np.zeros((self.nb, 6)) if V is None else np.asarray(V, float).reshape(self.nb, 6)
+        rows, cols, vals = [], [], []
+        six = np.arange(6)
+
+        def put(a, b, block):
+            n = len(block)
+            rows.append(np.repeat(6 * a + six[:n], n)), cols.append(np.tile(6 * b + six[:n], n))
+            vals.append(block.ravel())
         for (i, si, j, sj, k, d) in self.springs:
             ends = [(i, np.asarray(si, float), 1.0)] + ([(j, np.asarray(sj, float), -1.0)] if j >= 0 else [])
             D = {b: np.hstack([-R[b] @ hat(s[None])[0], np.eye(3)]) for b, s, _ in ends}
-            pi = r[i] + R[i] @ ends[0][1]
-            pj = r[j] + R[j] @ sj if j >= 0 else np.asarray(sj, float)
-            F = k * (pj - pi)                                   # elastic force on body i
+            ws = {b: np.cross(Vb[b, :3], s) for b, s, _ in ends}           # ω × s, body frame
+            # F on body i = -Σ g (k p + d v) over the ends (g = +1 at i, -1 at j)
+            F = sum(-g * (k * (r[b] + R[b] @ s) + d * (Vb[b, 3:] + R[b] @ ws[b])) for b, s, g in ends)
+            if j < 0:
+                F = F + k * np.asarray(sj, float)
             for a, sa, ga in ends:
                 for b, _, gb in ends:
-                    out[6 * a:6 * a + 6, 6 * b:6 * b + 6] += ga * gb * (c_pos * k + c_vel * d) * D[a].T @ D[b]
-                out[6 * a:6 * a + 3, 6 * a:6 * a + 3] -= c_pos * ga * hat(sa[None])[0] @ hat((R[a].T @ F)[None])[0]
+                    put(a, b, ga * gb * (c_pos * k + c_vel * d) * D[a].T @ D[b])
+                    if d and c_pos:                     # -∂Q_a/∂θ_b of the damping force
+                        blk = np.zeros((6, 6))
+                        blk[:, :3] = -c_pos * ga * gb * d * D[a].T @ R[b] @ hat(ws[b][None])[0]
+                        put(a, b, blk)
+                put(a, a, -c_pos * ga * hat(sa[None])[0] @ hat((R[a].T @ F)[None])[0])
+        n = 6 * self.nb
+        cat = (lambda x, dt: np.concatenate(x) if x else np.zeros(0, dt))
+        rows, cols, vals = cat(rows, int), cat(cols, int), cat(vals, float)
+        if sparse:
+            from scipy import sparse as _sp
+            return _sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+        out = np.zeros((n, n))
+        np.add.at(out, (rows, cols), vals)
         return out
 
     def f(self, q, V, t):
+        """V̇ (index 1): M⁻¹(Q - Aᵀλ) with A M⁻¹Aᵀ λ = A M⁻¹Q + γ; a new array."""
+        if not self.compiled:
+            return self._f_numpy(q, V, t)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        load = self._knoload
+        if self.load is not None:
+            F, T = self.load(t, q, V)
+            load = self._kload
+            load[:, :3] = T
+            load[:, 3:] = F
+        out = np.empty(6 * self.nb)
+        (_KS or _kernels()).f(self._kI, self._kF, q, V, load, out)
+        return out
+
+    def _f_numpy(self, q, V, t):
         Q = self.forces(q, V, t)
         if not self.n_constraints:
             return self.solve_mass(q, Q)
@@ -173,6 +268,14 @@ class RigidBodySystem(Model):
         return MiQ - MiAt @ lam
 
     def constraints(self, q):
+        if not (self.compiled and self.n_constraints):
+            return self._constraints_numpy(q)
+        out = np.empty(self.n_constraints)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        (_KS or _kernels()).constraints(self._kI, self._kF, q, out)
+        return out
+
+    def _constraints_numpy(self, q):
         if not self.n_constraints:
             return np.zeros(0)
         r, R = self._poses(q)
@@ -183,6 +286,14 @@ class RigidBodySystem(Model):
 
     def constraint_jacobian(self, q):
         """ġ = A V: for body i, [-R_i s̃_i, I] (and the negative for body j)."""
+        if not (self.compiled and self.n_constraints):
+            return self._constraint_jacobian_numpy(q)
+        A = np.zeros((self.n_constraints, 6 * self.nb))
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        (_KS or _kernels()).constraint_jacobian(self._kI, self._kF, q, A)
+        return A
+
+    def _constraint_jacobian_numpy(self, q):
         nj = len(self.joints)
         A = np.zeros((3 * nj, 6 * self.nb))
         if not nj:
@@ -202,6 +313,15 @@ class RigidBodySystem(Model):
 
     def constraint_gamma(self, q, V):
         """γ = (d/dt A) V = R_i (ω_i × (ω_i × s_i)) - R_j (ω_j × (ω_j × s_j))."""
+        if not (self.compiled and self.n_constraints):
+            return self._constraint_gamma_numpy(q, V)
+        out = np.empty(self.n_constraints)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        (_KS or _kernels()).constraint_gamma(self._kI, self._kF, q, V, out)
+        return out
+
+    def _constraint_gamma_numpy(self, q, V):
         if not self.n_constraints:
             return np.zeros(0)
         _, R = self._poses(q)
