@@ -1,0 +1,228 @@
+"""The Newton iteration matrix of generalized-α, assembled per body (block-sparse).
+
+The unknowns are Ẇ_{k+1} (per rigid body (ω̇, u̇) on SE(3), u = Rᵀṙ body-fixed;
+(ω̇, r̈) on SO(3)xR³; ω̇ for a rotation-only body; v̇ for vector coordinates) and λ.
+With k = (1 - α_f)/(1 - α_m), s_v = hγk and s_p = h²βk a change δẆ moves
+
+    d = h W_k + h²(½ - β) a_k + h²β a_{k+1}   by s_p δẆ,    X = S d   (S: the chart scale)
+    W_{k+1}                                   by s_v δẆ
+
+and the body (in the group G of its set) by the body-frame increment ξ = dψ_{-X} S δd
+(T(ΔX) = dψ_{-X}, exact: no T ≈ I simplification). The model's matrices act on the
+increments of SO(3)xR³, δz = (δθ body, δr inertial), and on V = (ω, ṙ):
+
+    δz = Pᵀ ξ,  Pᵀ = blockdiag(I, R) on SE(3) (r' = r + R ξ_lin + O(ξ²)), I on SO(3)xR³
+    SE(3):  V_lin = R u,              δV_lin = s_v R δu̇ - R ũ δθ
+            V̇_lin = R (u̇ + ω × u),   δV̇_lin = R δu̇ + s_v R (ω̃ δu̇ - ũ δω̇) - R (u̇ + ω × u)~ δθ
+
+(δR = R δθ~). Per body this gives three block transforms — Z = ∂z/∂Ẇ, D_v = ∂V/∂Ẇ,
+D_a = ∂V̇/∂Ẇ — and the Jacobian of the residual in the model's rows
+
+    ∂(M V̇ - Q + Aᵀλ)/∂Ẇ = M D_a + C_t D_v + K_t Z,     ∂(g/(h²β))/∂Ẇ = A Z/(h²β)
+
+with M, C_t = -∂Q/∂V and K_t = ∂(M V̇ - Q + Aᵀλ)/∂z the model's (``iteration_matrix``).
+Every product with a block transform is formed on the model matrices' nonzeros (COO
+triples), and the whole matrix is built as one sparse matrix.
+"""
+import warnings
+
+import numpy as np
+
+from ..groups import se3 as _se3
+from ..groups import so3 as _so3
+from ..groups import so3xr3 as _so3xr3
+from ..groups._vec import cross, hat
+
+_EYE3 = np.eye(3)
+_DPSI = {("SE3", "exp"): _se3._dexp, ("SE3", "cay"): _se3._dcay,
+         ("SO3xR3", "exp"): _so3xr3._dexp, ("SO3xR3", "cay"): _so3xr3._dcay,
+         ("SO3", "exp"): _so3._dexp, ("SO3", "cay"): _so3._dcay}
+
+SPARSE_MIN = 200        # unknowns above which the iteration matrix is factored sparse
+BLOCK_MAX = 12          # independent diagonal blocks up to this size are inverted explicitly
+
+
+def coo(X):
+    """(rows, cols, values) of the nonzeros of a dense or scipy.sparse matrix."""
+    if hasattr(X, "tocoo"):
+        X = X.tocoo()
+        keep = X.data != 0
+        return X.row[keep].astype(np.int64), X.col[keep].astype(np.int64), X.data[keep]
+    X = np.asarray(X, float)
+    r, c = np.nonzero(X)
+    return r, c, X[r, c]
+
+
+def csr(shape, parts):
+    """One scipy.sparse CSR matrix from COO triples (duplicates summed)."""
+    from scipy import sparse
+    parts = [p for p in parts if len(p[0])]
+    if not parts:
+        return sparse.csr_matrix(shape)
+    r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    keep = v != 0
+    return sparse.csr_matrix((v[keep], (r[keep], c[keep])), shape=shape)
+
+
+class BlockDiagonal:
+    """A block-diagonal matrix over V's layout, stored by rows: row j holds the row of
+    its body's block (at most ``width`` entries; unused slots are zeros on the diagonal)."""
+
+    def __init__(self, n, width=6):
+        self.n = n
+        self.cols = np.repeat(np.arange(n)[:, None], width, axis=1)
+        self.vals = np.zeros((n, width))
+
+    def add(self, idx, blocks):
+        """idx (N, m): V indices of N bodies; blocks (N, m, m)."""
+        m = idx.shape[1]
+        self.cols[idx, :m] = idx[:, None, :]
+        self.vals[idx, :m] = blocks
+
+    def set_diagonal(self, idx, value):
+        self.vals[idx, 0] = value
+
+    def rmul(self, rows, cols, vals):
+        """X D for X given by COO triples: COO triples (duplicates to be summed)."""
+        w = self.vals.shape[1]
+        return (np.repeat(rows, w), self.cols[cols].ravel(), (vals[:, None] * self.vals[cols]).ravel())
+
+    def triples(self):
+        return np.repeat(np.arange(self.n), self.vals.shape[1]), self.cols.ravel(), self.vals.ravel()
+
+
+class Kinematics:
+    """The per-body block transforms Z, D_v, D_a (and Pᵀ) of one local problem."""
+
+    def __init__(self, prob):
+        self.prob = prob
+        self.dpsi = [_DPSI[("SO3" if s.rot_only else "SE3" if s.se3 else "SO3xR3",
+                            "cay" if s.cay else "exp")] for s in prob.sets]
+        self.vector_v = np.array(prob.layout.vector_v, int)
+        self.wlin = [s.wlin for s in prob.sets if s.se3]
+
+    def rotations(self, quats):
+        """R of every SE(3) body, per set, read off the problem's own V_lin = R u (whatever
+        form the backend keeps its quaternions in)."""
+        if not self.wlin:
+            return []
+        cols = []
+        for j in range(3):
+            E = np.zeros(self.prob.nv)
+            for wl in self.wlin:
+                E[wl[:, j]] = 1.0
+            cols.append(self.prob.model_velocity(E, quats))
+        return [np.stack([c[wl] for c in cols], axis=2) for wl in self.wlin]
+
+    def transforms(self, dX, W, Wd, quats, s_v, s_p):
+        """(Z, D_v, D_a, Pᵀ) as :class:`BlockDiagonal` at the iterate (X = dX, W, Ẇ and the
+        configuration's quaternions); Pᵀ = blockdiag(I, R) per SE(3) body, None without
+        SE(3) bodies."""
+        prob = self.prob
+        n = len(W)
+        Z, Dv, Da = BlockDiagonal(n), BlockDiagonal(n), BlockDiagonal(n)
+        Pt = None
+        if self.wlin:
+            Pt = BlockDiagonal(n)
+            Pt.set_diagonal(np.arange(n), 1.0)
+        Rs = iter(self.rotations(quats))
+        for s, dpsi in zip(prob.sets, self.dpsi):
+            X, S = dX[s.xidx], prob.chart_scale[s.xidx]
+            nb, m = X.shape
+            G = s_p * dpsi(-X) * S[:, None, :]                           # ∂ξ/∂Ẇ
+            eye = np.broadcast_to(np.eye(m), (nb, m, m))
+            if not s.se3:
+                Z.add(s.vidx, G)
+                Dv.add(s.vidx, s_v * eye)
+                Da.add(s.vidx, eye)
+                continue
+            R = next(Rs)
+            w, u, ud = W[s.wang], W[s.wlin], Wd[s.wlin]
+            theta = G[:, :3, :]                                         # ∂δθ/∂Ẇ
+            z = G.copy()
+            z[:, 3:, :] = R @ G[:, 3:, :]
+            RU = R @ hat(u)
+            dv = np.zeros((nb, 6, 6))
+            dv[:, :3, :3] = s_v * _EYE3
+            dv[:, 3:, 3:] = s_v * R
+            dv[:, 3:, :] -= RU @ theta
+            da = np.zeros((nb, 6, 6))
+            da[:, :3, :3] = _EYE3
+            da[:, 3:, :3] = -s_v * RU
+            da[:, 3:, 3:] = R + s_v * (R @ hat(w))
+            da[:, 3:, :] -= (R @ hat(ud + cross(w, u))) @ theta
+            pt = np.zeros((nb, 6, 6))
+            pt[:, :3, :3] = _EYE3
+            pt[:, 3:, 3:] = R
+            Z.add(s.vidx, z)
+            Dv.add(s.vidx, dv)
+            Da.add(s.vidx, da)
+            Pt.add(s.vidx, pt)
+        if len(self.vector_v):
+            Z.set_diagonal(self.vector_v, s_p)
+            Dv.set_diagonal(self.vector_v, s_v)
+            Da.set_diagonal(self.vector_v, 1.0)
+        return Z, Dv, Da, Pt
+
+
+def factorize(J, L=None):
+    """A solver r ↦ J⁻¹ (L r) (L = None: the identity) for dense or scipy.sparse J, L.
+    A J that falls apart into independent blocks of at most BLOCK_MAX unknowns (bodies
+    that do not interact) is inverted block by block and J⁻¹L applied as one sparse
+    product (a sparse triangular solve costs more than that); otherwise sparse LU above
+    SPARSE_MIN unknowns, dense LU below. Raises np.linalg.LinAlgError or RuntimeError on
+    a singular J."""
+    from scipy import sparse
+    S = _block_inverse(sparse.csr_matrix(J), L)
+    if S is not None:
+        return S.__matmul__
+    if J.shape[0] > SPARSE_MIN:
+        from scipy.sparse.linalg import splu
+        solve = splu(sparse.csc_matrix(J)).solve
+        if L is None:
+            return solve
+        L = sparse.csr_matrix(L)
+        return lambda r: solve(L @ r)
+    import scipy.linalg as sla
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sla.LinAlgWarning)       # reported below
+        lu = sla.lu_factor(J.toarray() if sparse.issparse(J) else J, check_finite=False)
+    if not np.all(np.diag(lu[0])):
+        raise np.linalg.LinAlgError("the matrix is exactly singular")
+    if L is None:
+        return lambda r: sla.lu_solve(lu, r, check_finite=False)
+    return sla.lu_solve(lu, L.toarray() if sparse.issparse(L) else L, check_finite=False).dot
+
+
+def _block_inverse(J, L):
+    """J⁻¹L as a sparse matrix when J's graph has only components of ≤ BLOCK_MAX nodes and
+    L stays inside them (else None); a sparse product is faster than batched small ones."""
+    from scipy.sparse.csgraph import connected_components
+    n = J.shape[0]
+    ncomp, label = connected_components(J, directed=False)
+    sizes = np.bincount(label, minlength=ncomp)
+    if sizes.max() > BLOCK_MAX:
+        return None
+    Lr, Lc, Lv = coo(L) if L is not None else (np.arange(n), np.arange(n), np.ones(n))
+    if np.any(label[Lr] != label[Lc]):
+        return None
+    order = np.argsort(label, kind="stable")
+    first = np.concatenate([[0], np.cumsum(sizes)])
+    pos = np.empty(n, int)
+    pos[order] = np.arange(n) - first[label[order]]                 # place within its block
+    group = np.empty(ncomp, int)                                    # index among blocks of its size
+    parts = []
+    Jr, Jc, Jv = coo(J)
+    for m in np.unique(sizes):
+        comps = np.flatnonzero(sizes == m)
+        group[comps] = np.arange(len(comps))
+        blocks = np.zeros((len(comps), m, m))
+        rhs = np.zeros((len(comps), m, m))
+        sel = sizes[label[Jr]] == m
+        np.add.at(blocks, (group[label[Jr[sel]]], pos[Jr[sel]], pos[Jc[sel]]), Jv[sel])
+        sel = sizes[label[Lr]] == m
+        np.add.at(rhs, (group[label[Lr[sel]]], pos[Lr[sel]], pos[Lc[sel]]), Lv[sel])
+        S = np.linalg.solve(blocks, rhs)
+        members = order[first[comps][:, None] + np.arange(m)]
+        parts.append((np.repeat(members, m, axis=1).ravel(), np.tile(members, (1, m)).ravel(), S.ravel()))
+    return csr((n, n), parts)
