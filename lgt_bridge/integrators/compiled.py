@@ -1,8 +1,10 @@
 """The local problem on compiled kernels (:mod:`lgt_bridge.kernels.stage`).
 
 Same operations and results as :class:`~lgt_bridge.integrators.local.LocalProblem`
-(tests: 1e-13), with every body of the model handled in one kernel call and the
-stage buffers allocated once. The bodies' quaternions ("quats") are one (N, 4) array
+(tests: 1e-13), with every body of the model handled in one kernel call and the stage
+state in one preallocated work array. A stage is one kernel call (the previous stage's
+derivative from the model's V̇, fused with this stage's state) and the model's f, which
+receives views of the work array. The bodies' quaternions ("quats") are one (N, 4) array
 instead of a list per body set.
 """
 import numpy as np
@@ -11,7 +13,7 @@ from ..kernels import stage as _k
 from ..kernels.rotations import PARAM_CODES
 from .local import LocalProblem
 
-_EMPTY = np.zeros((0, 0))
+_NONE = np.zeros(0)
 
 
 class CompiledProblem(LocalProblem):
@@ -23,52 +25,62 @@ class CompiledProblem(LocalProblem):
         self.bt = _k.body_table(self.sets, PARAM_CODES)
         self.vt = np.stack([self.vq, self.vv, self.vx], axis=1).astype(np.int64).reshape(-1, 3)
         nb, nq = len(self.bt), self.layout.nq
-        self._X = np.zeros(self.nX)
-        self._W = np.zeros(self.nv)
-        self._q = np.zeros(nq)
-        self._V = np.zeros(self.nv)
+        self.off, size = _k.work_layout(self.nX, self.nv, nq, nb)
+        self.work = np.zeros(size)
+        (self._X, self._W, self._q, self._V, self._W0, self._qk, self._pk,
+         self._p) = _k.views(self.work, self.off)
         self._Xd = np.zeros(self.nX)
-        self._p = np.zeros((nb, 4))
         self._one = np.ones(1)
-        self._zW = np.zeros(self.nv)
-        self._zK = np.zeros((1, self.nv))
+        self._zK = np.zeros((2, max(self.nX, self.nv)))
+        self._W0_src = None            # the array last copied into the W0 slot
+        self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
+        self._pending = None           # (i, t, ts) of that stage
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
-        self.q_k = np.ascontiguousarray(q_k, dtype=float)
+        self.q_k = q_k
+        self._qk[:] = q_k
         if quats is None:
-            quats = np.empty((len(self.bt), 4))
-            _k.bases(self.bt, self.q_k, quats)
-        self.pk = quats
+            _k.bases(self.bt, self._qk, self._pk)
+        else:
+            self._pk[:] = quats
+        self._vd = _NONE
 
     @property
     def start_quats(self):
-        return self.pk
+        return self._pk.copy()
 
     def snapshot(self):
-        return self.q_k, self.pk
+        return self.q_k, self._pk.copy()
 
     def restore(self, snap):
-        self.q_k, self.pk = snap
+        self.start(*snap)
+
+    def _w0(self, W0):
+        if W0 is not self._W0_src:
+            self._W0[:] = W0
+            self._W0_src = W0
 
     def _at(self, X, W):
-        """Kernel τ and velocities at (X, W): fills the internal buffers."""
-        X = np.ascontiguousarray(X, dtype=float).reshape(1, -1)
-        _k.stage_state(X, self._zK, self._one, 1, 1.0, W, self._X, self._W, self.bt, self.vt,
-                       self.q_k, self.pk, self._q, self._V, self._Xd, self._p)
+        """τ and velocities at (X, W) into the work array (q, V, p; Xd into _Xd)."""
+        K = np.ascontiguousarray(X, dtype=float).reshape(1, -1)
+        self._W0[:] = W
+        self._W0_src = None
+        _k.stage_state(K, self._zK, self._one, 1, 1.0, self._W0, self._X, self._W, self.bt, self.vt,
+                       self._qk, self._pk, self._q, self._V, self._Xd, self._p)
 
     def configuration(self, X):
-        self._at(X, self._zW)
+        self._at(X, 0.0)
         return self._q.copy(), self._p.copy()
 
     def state_at(self, X, W):
-        self._at(X, np.ascontiguousarray(W, dtype=float))
+        self._at(X, W)
         return self._q.copy(), self._V.copy()
 
     def _convert(self, mode, src, W, quats):
         out = np.empty(len(src))
         _k.convert(mode, np.ascontiguousarray(src, dtype=float), np.ascontiguousarray(W, dtype=float),
-                   quats, self.bt, out)
+                   np.ascontiguousarray(quats, dtype=float), self.bt, out)
         return out
 
     def model_velocity(self, W, quats):
@@ -84,38 +96,60 @@ class CompiledProblem(LocalProblem):
         return self._convert(3, Wdot, W, quats)
 
     def kinematics(self, X, W):
-        self._at(X, np.ascontiguousarray(W, dtype=float))
+        self._at(X, W)
         return self._Xd.copy()
 
     def rhs(self, X, W, t, at_start=False):
-        W = np.ascontiguousarray(W, dtype=float)
         self._at(X, W)
         q, V, Xd, p = self._q.copy(), self._V.copy(), self._Xd.copy(), self._p.copy()
         Vd = np.asarray(self.model.f(q, V, t), dtype=float)
         self.n_f += 1
-        return Xd, self.group_acceleration(Vd, W, p), q, V
+        return Xd, self.group_acceleration(Vd, self._W, p), q, V
 
     # --- the stage API ------------------------------------------------------------
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
-        c = _k.stage_state(KX, KW, a, i, h, W0, self._X, self._W, self.bt, self.vt, self.q_k,
-                           self.pk, self._q, self._V, KX[i], self._p)
+        self._w0(W0)
+        if i == 0:
+            self._vd = _NONE
+        c = _k.stage(self._vd, KX, KW, a, i, h, self.work, self.bt, self.vt, self.off)
+        if c < 0.0:
+            self._failed(KX, KW)
+        self._vd = _NONE
         if c > climit:
             return c
         Vd = self.model.f(self._q, self._V, ts)
         self.n_f += 1
-        if type(Vd) is not np.ndarray or Vd.dtype != np.float64:
-            Vd = np.asarray(Vd, dtype=float)
-        if not _k.stage_derivative(Vd, self._W, self._p, self.bt, KW, KX, i):
-            self.stage_failed(KX[i], KW[i], t, ts, self._q, self._V)
+        if type(Vd) is not np.ndarray or Vd.dtype != np.float64 or not Vd.flags.c_contiguous:
+            Vd = np.ascontiguousarray(Vd, dtype=float)
+        self._vd = Vd
+        self._pending = (i, t, ts)
         return 0.0
 
+    def _failed(self, KX, KW):
+        i, t, ts = self._pending
+        self._vd = _NONE
+        self.stage_failed(KX[i], KW[i], t, ts, self._q, self._V)
+
+    def flush(self, KX, KW):
+        """Convert the last stage's V̇ (the fused kernel defers it to the next call)."""
+        if len(self._vd):
+            i = self._pending[0]
+            if _k.stage(self._vd, KX, KW, _NONE, i + 1, 0.0, self.work, self.bt, self.vt, self.off) < 0.0:
+                self._failed(KX, KW)
+            self._vd = _NONE
+
     def start_rates(self, KX, W0):
-        _k.stage_state(KX, self._zK, self._one, 0, 0.0, W0, self._X, self._W, self.bt, self.vt,
-                       self.q_k, self.pk, self._q, self._V, KX[0], self._p)
+        self._w0(W0)
+        self._vd = _NONE
+        _k.stage(_NONE, KX, self._zK, self._one, 0, 0.0, self.work, self.bt, self.vt, self.off)
 
     def end(self, KX, KW, b, h, W0):
-        _k.stage_state(KX, KW, b, len(b), h, W0, self._X, self._W, self.bt, self.vt, self.q_k,
-                       self.pk, self._q, self._V, self._Xd, self._p)
+        self._w0(W0)
+        i = self._pending[0] + 1 if len(self._vd) else len(b)
+        c = _k.stage(self._vd, KX, KW, b, i, h, self.work, self.bt, self.vt, self.off)
+        if c < 0.0:
+            self._failed(KX, KW)
+        self._vd = _NONE
         return self._X.copy(), self._W.copy(), self._q.copy(), self._V.copy(), self._p.copy()
 
     def max_cayley(self, X):

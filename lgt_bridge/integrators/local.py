@@ -183,7 +183,9 @@ class LocalProblem:
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
         """Stage i of a step from t: X = h Σ_{j<i} a_j KX_j, W = W0 + h Σ a_j KW_j,
         KX[i] = dψ⁻¹_{-X}(W), KW[i] = Ẇ from f at time ts. Returns 0.0, or the largest
-        Cayley |c| (f not called) when it exceeds ``climit``; StepFailed on NaN/inf."""
+        Cayley |c| (f not called) when it exceeds ``climit``; StepFailed on NaN/inf.
+        KW[i] is complete after the next ``stage``, ``end`` or ``flush`` call (the compiled
+        backend converts it in the same kernel call as the next stage's state)."""
         if i == 0:
             X, W = np.zeros(self.nX), W0
         else:
@@ -196,6 +198,9 @@ class LocalProblem:
         if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
             self.stage_failed(KX[i], KW[i], t, ts, q, V)
         return 0.0
+
+    def flush(self, KX, KW):
+        """Complete the last stage's KW (the compiled backend defers it; here a no-op)."""
 
     def start_rates(self, KX, W0):
         """KX[0] = dψ⁻¹_0(W0) (the first stage's kinematics, no f)."""

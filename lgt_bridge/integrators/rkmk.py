@@ -218,6 +218,7 @@ class DenseStep:
                 cm = prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)
                 if cm:   # pragma: no cover - no limit passed
                     raise StepFailed("dense output: Cayley limit")
+            prob.flush(KX, KW)
         finally:
             prob.restore(snap)
         n = ns + len(c)

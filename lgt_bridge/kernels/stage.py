@@ -23,6 +23,31 @@ from .rotations import c3, cross, dser, eser, from_quat, gibbs_minus_one, qmul, 
 PARAM, SE3, CAY, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
 NCOL = 19
 
+# the work array of a problem: one float64 vector holding, at these offsets (``off``),
+# X, W, q, V (the current stage), W0 (the step's start), q_k and the quaternions p_k and p
+# (4 per body), and a scratch Ẋ; off[9:] = nX, nv, nq, nb. One array instead of nine keeps
+# the kernels' argument lists short: a numba call costs ~0.1 µs per argument.
+OX, OW, OQ, OV, OW0, OQK, OPK, OP, OXD, NX_, NV_, NQ_, NB_ = range(13)
+
+
+def work_layout(nX, nv, nq, nb):
+    """(off, size) of a work array for these sizes."""
+    sizes = [nX, nv, nq, nv, nv, nq, 4 * nb, 4 * nb, nX]
+    off = np.zeros(13, np.int64)
+    off[:9] = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    off[9:] = nX, nv, nq, nb
+    return off, int(sum(sizes))
+
+
+@njit(cache=True, error_model="numpy")
+def views(w, off):
+    """X, W, q, V, W0, q_k, p_k (nb, 4), p (nb, 4) as views of the work array (the
+    scratch Ẋ is ``w[off[OXD]:]``)."""
+    nX, nv, nq, nb = off[NX_], off[NV_], off[NQ_], off[NB_]
+    return (w[off[OX]:off[OX] + nX], w[off[OW]:off[OW] + nv], w[off[OQ]:off[OQ] + nq],
+            w[off[OV]:off[OV] + nv], w[off[OW0]:off[OW0] + nv], w[off[OQK]:off[OQK] + nq],
+            w[off[OPK]:off[OPK] + 4 * nb].reshape((nb, 4)), w[off[OP]:off[OP] + 4 * nb].reshape((nb, 4)))
+
 
 def body_table(sets, codes):
     """The int64 body table of a LocalProblem's body sets (``codes``: parameterization
@@ -205,6 +230,22 @@ def stage_derivative(Vd, W, p, bt, KW, KX, i):
         if not math.isfinite(KX[i, j]):
             ok = False
     return ok
+
+
+@njit(cache=True, error_model="numpy")
+def stage(Vd, KX, KW, a, i, h, w, bt, vt, off):
+    """One fused call per stage: when ``Vd`` is not empty, the stage derivative of stage
+    i - 1 from the model's V̇ (KW[i-1]; -1.0 is returned when KX[i-1] or KW[i-1] is not
+    finite); then, when ``a`` is not empty, the state of stage i (X, W, q, V, p in the work
+    array, KX[i] = dψ⁻¹_{-X}(W)), returning the largest Cayley |c|."""
+    X, W, q, V, W0, qk, pk, p = views(w, off)
+    if Vd.shape[0] > 0:
+        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
+            return -1.0
+    if a.shape[0] == 0:
+        return 0.0
+    Xd = KX[i] if i < KX.shape[0] else w[off[OXD]:off[OXD] + off[NX_]]
+    return stage_state(KX, KW, a, i, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p)
 
 
 @njit(cache=True, error_model="numpy")
