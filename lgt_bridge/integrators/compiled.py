@@ -14,6 +14,7 @@ from ..kernels.rotations import PARAM_CODES
 from .local import LocalProblem
 
 _NONE = np.zeros(0)
+_F64 = np.dtype(np.float64)
 
 
 class CompiledProblem(LocalProblem):
@@ -119,7 +120,7 @@ class CompiledProblem(LocalProblem):
             return c
         Vd = self.model.f(self._q, self._V, ts)
         self.n_f += 1
-        if type(Vd) is not np.ndarray or Vd.dtype != np.float64 or not Vd.flags.c_contiguous:
+        if type(Vd) is not np.ndarray or Vd.dtype is not _F64:     # (other layouts: numba adapts)
             Vd = np.ascontiguousarray(Vd, dtype=float)
         self._vd = Vd
         self._pending = (i, t, ts)

@@ -29,6 +29,7 @@ class ExplicitRK(Stepper):
         self.KX, self.KW = self._bufs[0]
         self._A = [np.ascontiguousarray(row, dtype=float) for row in tableau.A]
         self._b = np.ascontiguousarray(tableau.b, dtype=float)
+        self._c = [float(x) for x in tableau.c]      # Python floats: stage times without numpy scalars
         self._fsal = False                     # KW[0] holds the first stage of the next step
         self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
 
@@ -38,13 +39,12 @@ class ExplicitRK(Stepper):
 
     def stages(self, t, h):
         """All stages of one step; returns (X1, W1, q1, V1, quats) or raises _CayleyLimit."""
-        prob, tab, KX, KW = self.prob, self.tab, self.KX, self.KW
-        c, W0 = tab.c, self.W
-        for i in range(tab.stages):
+        prob, KX, KW, W0, A, lim = self.prob, self.KX, self.KW, self.W, self._A, self.climit
+        for i, c in enumerate(self._c):
             if i == 0 and self._fsal:
                 prob.start_rates(KX, W0)
                 continue
-            cm = prob.stage(KX, KW, i, self._A[i], h, W0, t, t + c[i] * h, self.climit)
+            cm = prob.stage(KX, KW, i, A[i], h, W0, t, t + c * h, lim)
             if cm:
                 raise _CayleyLimit(cm)
         return prob.end(KX, KW, self._b, h, W0)

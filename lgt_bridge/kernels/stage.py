@@ -88,16 +88,22 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     ``ns = 0``: the step's start (X = 0, q = q_k). Returns the largest |c| of the
     Cayley-chart bodies (a half-turn is |c| -> ∞)."""
     nX, nv = X.shape[0], W.shape[0]
+    # row by row (contiguous, vectorized); the same sums in the same order as a @ K
     for j in range(nX):
-        s = 0.0
-        for i in range(ns):
-            s += a[i] * KX[i, j]
-        X[j] = h * s
+        X[j] = 0.0
     for j in range(nv):
-        s = 0.0
-        for i in range(ns):
-            s += a[i] * KW[i, j]
-        W[j] = W0[j] + h * s
+        W[j] = 0.0
+    for i in range(ns):
+        ai = a[i]
+        if ai != 0.0:
+            for j in range(nX):
+                X[j] += ai * KX[i, j]
+            for j in range(nv):
+                W[j] += ai * KW[i, j]
+    for j in range(nX):
+        X[j] *= h
+    for j in range(nv):
+        W[j] = W0[j] + h * W[j]
     cmax = 0.0
     for b in range(bt.shape[0]):
         se3, cay, ro, xo = bt[b, SE3] == 1, bt[b, CAY] == 1, bt[b, ROT_ONLY] == 1, bt[b, XOFF]
