@@ -55,10 +55,11 @@ def test_dop853_fitted_order_is_eight(group):
 
 @pytest.mark.parametrize("tab_name, order", [("dopri5", 4), ("dop853", 7)])
 def test_dense_output_local_error_has_the_interpolants_order(tab_name, order):
-    """One step of size h from the exact state, evaluated at mid-step: the interpolation
-    error is O(h^(p+1)) with p = 4 (dopri5) and p = 7 (dop853)."""
+    """One step of size h from the exact state, evaluated inside the step: the interpolation
+    error is O(h^(p+1)) with p = 4 (dopri5) and p = 7 (dop853). Measured slopes 5.56 and 8.13
+    (θ = 0.37; 5.52/8.13 at θ = 0.5, 5.64/8.07 at θ = 0.81), errors 6e-6…3e-9 and 5e-7…7e-12."""
     tab = DOPRI5 if tab_name == "dopri5" else dop853()
-    hs = [0.02, 0.01, 0.005] if order == 4 else [0.04, 0.02, 0.01]
+    hs = [0.005, 0.0025, 0.00125] if order == 4 else [0.01, 0.005, 0.0025]
     errs = []
     for h in hs:
         m = scenes.heavy_top(False)
@@ -69,14 +70,14 @@ def test_dense_output_local_error_has_the_interpolants_order(tab_name, order):
         sol = ref.heavy_top(h, t_eval=[0.37 * h])
         errs.append(ref.angle(_rot(q), _ref_R(sol, 0)))
     s = ref.slope(hs, errs)
-    assert s >= order + 1 - 0.3, (errs, s)
+    assert abs(s - (order + 1)) <= 0.7, (errs, s)
 
 
 @pytest.mark.parametrize("method", ["dopri5", "dop853"])
 def test_dense_output_at_output_times_matches_reference(method):
     """On the constrained heavy top, interpolated outputs are as accurate as step ends:
-    measured (rtol 1e-9, 60 output times, 0.2 s): dense error within 3× the error at the
-    step ends; the bound asserted is 20× (plus 1e-12)."""
+    measured (rtol 1e-9, 61 output times, 0.2 s): the largest dense error equals the largest
+    error at the step ends (dopri5 3.2e-9, dop853 2.3e-9); the bound asserted is 3× (plus 1e-12)."""
     T = 0.2
     t_eval = np.linspace(0.0, T, 61)
     r = simulate(scenes.heavy_top(True), (0, T), method=method, rtol=1e-9, atol=1e-9, t_eval=t_eval)
@@ -86,7 +87,7 @@ def test_dense_output_at_output_times_matches_reference(method):
     dense = max(ref.angle(_rot(r.q[k]), _ref_R(sol, k)) for k in range(len(t_eval)))
     sol_s = ref.heavy_top(T, t_eval=full.t)
     steps = max(ref.angle(_rot(full.q[k]), _ref_R(sol_s, k)) for k in range(len(full.t)))
-    assert dense <= 20 * steps + 1e-12, (dense, steps)
+    assert dense <= 3 * steps + 1e-12, (dense, steps)
     # the rotation error also bounds the joint: the outputs are consistent poses
     assert r.stats["n_steps"] == full.stats["n_steps"]
 
