@@ -8,9 +8,14 @@ V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
 configuration space is a vector space (nq = nv: revolute, prismatic, translation)
 are vector-space blocks.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
+
+Backends (:mod:`lgt_bridge.backend`, fixed when the model is built): with numba, f converts
+V to Pinocchio's v and ABA's a to V̇ by two compiled calls (:mod:`lgt_pinocchio.kernels`)
+over a preallocated v; with numpy it runs the readable reference (``_f_numpy``).
 """
 import numpy as np
 
+from lgt_bridge import backend as _backend
 from lgt_bridge import lgt as _lgt
 from lgt_bridge import params
 from lgt_bridge.errors import InputError
@@ -24,9 +29,21 @@ VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX",
                  "JointModelTranslation", "JointModelHelicalX", "JointModelHelicalY", "JointModelHelicalZ")
 
 
+_F64 = np.dtype(np.float64)
+_K = None           # lgt_pinocchio.kernels (imports numba), loaded by the first compiled model
+
+
 def _pin():
     import pinocchio
     return pinocchio
+
+
+def _kernels():
+    global _K
+    if _K is None:
+        from . import kernels
+        _K = kernels
+    return _K
 
 
 class PinocchioModel(Model):
@@ -34,12 +51,19 @@ class PinocchioModel(Model):
 
     tau: None (zero), a vector of size nv, or ``tau(t, q, v)`` (Pinocchio's q and v).
     fext: None or ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector
-    (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame.
+    (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame (a
+    ``pinocchio.StdVec_Force`` is passed on without conversion: the cheapest form).
     q0, v0: initial state in Pinocchio's own coordinates (default: neutral, zero).
+    backend: 'numba' or 'numpy' (default: $LGT_BRIDGE_BACKEND, else numba).
+
+    With the compiled backend, ``tau`` and ``fext`` receive the caller's q and the model's
+    own velocity buffer v, not copies: both are valid during the call only (copy them to
+    keep them) and must not be written to. f returns a new array either way.
     """
 
-    def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None):
+    def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None):
         pin = self.pin = _pin()
+        self.compiled = _backend.compiled(backend)
         self.model, self.data = model, model.createData()
         bodies, vq, vv = [], [], []
         self.roots, self.balls = [], []
@@ -93,6 +117,9 @@ class PinocchioModel(Model):
         self._move = _lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
         self._move_ball = _lgt.RotationLGT(params.QUAT_XYZW, "exp")
         self._setup_constraints(constraints or [], fext)
+        if self.compiled:
+            self._kW, self._kv = _kernels().pack(self.roots, self.nv)   # roots, v, quaternions
+            self.f = self._f_compiled = self._build_f()
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
         if fext is not None:
@@ -104,6 +131,16 @@ class PinocchioModel(Model):
         return p[:, [3, 0, 1, 2]]
 
     def v_from_twist(self, q, V):
+        """Pinocchio's v of the model twist V at q (a new array)."""
+        if not self.compiled:
+            return self._v_from_twist_numpy(q, V)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        W = self._kW.copy()
+        (_K or _kernels()).v_from_twist(q, V, W)
+        return W[self._kv].copy()
+
+    def _v_from_twist_numpy(self, q, V):
         v = V.copy()
         if len(self.roots):
             p = self._quats(q)
@@ -137,6 +174,8 @@ class PinocchioModel(Model):
             raise InputError(f"fext(t, q, v) returned {len(fs)} forces; Pinocchio needs one per joint, "
                              f"model.njoints = {self.model.njoints} (entry 0, the universe, is ignored). "
                              "Pinocchio does not check this itself and would read garbage.")
+        if type(fs) is pin.StdVec_Force:
+            return fs                                 # already Pinocchio's own container
         out = pin.StdVec_Force()
         for k, f in enumerate(fs):
             if isinstance(f, pin.Force):
@@ -253,8 +292,78 @@ class PinocchioModel(Model):
 
     # --- model protocol ---------------------------------------------------------------------------
     def f(self, q, V, t):
+        """V̇ = f(q, V, t): one Pinocchio ABA (constraintDynamics with constraints); a new array.
+        (A compiled model replaces this by the closure of :meth:`_build_f` on the instance.)"""
+        if self.compiled:
+            return self._f_compiled(q, V, t)
+        return self._f_numpy(q, V, t)
+
+    def _build_f(self):
+        """The compiled-backend f as a closure over its constants (no attribute look-ups per
+        call): V -> v by one kernel call into the work array, Pinocchio, then a -> V̇ in place
+        by a second (ABA's a is a new array, so it is returned as V̇)."""
+        K = _kernels()
+        v_from_twist, vdot_from_a = K.v_from_twist, K.vdot_from_a_unchecked
+        pin, model, data = self.pin, self.model, self.data
+        W = self._kW
+        v_buf = W[self._kv]
+        has_roots = bool(self.roots)
+        tau_c = np.zeros(self.nv) if self._tau is None else self._tau
+        tau_call = callable(tau_c)
+        nv_shape = (self.nv,)
+        checked_tau, forces = self._checked_tau, self._forces
+        ndarray, F64, contiguous = np.ndarray, _F64, np.ascontiguousarray
+        if self.n_constraints:
+            cms, cds, prox = self.cms, self.cds, self.prox
+            dynamics = pin.constraintDynamics
+
+            def engine(q, v, tau, t):
+                return dynamics(model, data, q, v, tau, cms, cds, prox)
+        elif self._fext is not None:
+            aba = pin.aba
+
+            def engine(q, v, tau, t):
+                return aba(model, data, q, v, tau, forces(t, q, v))
+        else:
+            engine = None
+            aba = pin.aba
+
+        def f(q, V, t):
+            if has_roots:
+                try:
+                    v_from_twist(q, V, W)
+                except TypeError:                      # not float64 C-contiguous arrays
+                    q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
+                    v_from_twist(q, V, W)
+                v = v_buf
+            else:
+                if type(q) is not ndarray or q.dtype is not F64:
+                    q = contiguous(q, dtype=F64)
+                if type(V) is not ndarray or V.dtype is not F64:
+                    V = contiguous(V, dtype=F64)
+                v = V                                  # the same in both coordinates
+            tau = tau_c
+            if tau_call:
+                tau = tau(t, q, v)
+                if type(tau) is not ndarray or tau.dtype is not F64 or tau.shape != nv_shape:
+                    tau = checked_tau(tau)
+            a = aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
+            if has_roots:
+                vdot_from_a(W, a)                      # in place (W and a: float64 vectors)
+            return a
+
+        f.__doc__ = PinocchioModel.f.__doc__
+        return f
+
+    def _checked_tau(self, tau):
+        tau = np.ascontiguousarray(tau, dtype=np.float64)
+        if tau.shape != (self.nv,):
+            raise InputError(f"tau(t, q, v) returned shape {tau.shape}; expected ({self.nv},).")
+        return tau
+
+    def _f_numpy(self, q, V, t):
         pin = self.pin
-        v = self.v_from_twist(q, V)
+        v = self._v_from_twist_numpy(q, V)
         tau = self._torques(t, q, v)
         if self.n_constraints:
             a = pin.constraintDynamics(self.model, self.data, q, v, tau, self.cms, self.cds, self.prox)

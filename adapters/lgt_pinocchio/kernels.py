@@ -1,0 +1,93 @@
+"""Compiled velocity / acceleration conversions of :class:`lgt_pinocchio.PinocchioModel`
+(numba; imported only by a model built with the compiled backend).
+
+Each free-flyer root has Pinocchio's q = (x y z, qx qy qz qw) and v = (v_lin body, ω body);
+the bridge's twist is V = (ω body, ṙ inertial) with ṙ = R v_lin. Every other velocity entry
+(spherical joints: ω as is; vector-space joints) is the same in both.
+
+A model's roots and work buffers are packed once (:func:`pack`) into one float64 array
+``W``, so that each kernel call takes few arguments (numba's dispatch costs ≈ 0.1 µs per
+argument): ``W[0]`` = n (the number of roots), ``W[1 + 2 r]``, ``W[2 + 2 r]`` = root r's
+index into q and into v (integers held exactly as floats), then Pinocchio's v (``nv``
+entries, the view handed to Pinocchio), then each root's scalar-first quaternion (4 each),
+so that the second call needs neither q nor v as arguments.
+
+* :func:`v_from_twist` (q, V, W): Pinocchio's v into W's v block, the quaternions after it;
+* :func:`vdot_from_a` (W, a): ABA's a, in place, into V̇ = (a_ang, R (a_lin + ω × v_lin)).
+
+The numpy reference is ``PinocchioModel._v_from_twist_numpy`` / ``_f_numpy``; tests hold them
+equal (1e-13). Plain loops: ``NUMBA_DISABLE_JIT=1`` runs the same source interpreted.
+"""
+import numpy as np
+from numba import njit
+
+from lgt_bridge.kernels.rotations import cross, rotate, to_quat
+
+XYZW = 1          # rotations.to_quat code of Pinocchio's quaternion order
+
+
+def pack(roots, nv):
+    """The work array ``W`` of the roots [(iq, iv), ...] of a model with nv velocities, and
+    the slice of its v block."""
+    n = len(roots)
+    h = 1 + 2 * n
+    W = np.zeros(h + nv + 4 * n)
+    W[0] = n
+    for k, (iq, iv) in enumerate(roots):
+        W[1 + 2 * k], W[2 + 2 * k] = iq, iv
+    return W, slice(h, h + nv)
+
+
+_VEC = "float64[::1]"
+
+
+# explicit signatures: other argument types raise TypeError instead of compiling a new
+# specialization, so the caller converts only then (no per-call type checks in Python)
+@njit(f"void({_VEC}, {_VEC}, {_VEC})", cache=True, error_model="numpy")
+def v_from_twist(q, V, W):
+    n, nv = int(W[0]), V.shape[0]
+    h = 1 + 2 * n
+    if h + nv + 4 * n != W.shape[0]:
+        raise ValueError("V has the wrong size for this model (expected nv entries)")
+    for k in range(nv):
+        W[h + k] = V[k]
+    for r in range(n):
+        iq, iv = int(W[1 + 2 * r]), int(W[2 + 2 * r])
+        p0, p1, p2, p3 = to_quat(XYZW, q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6])
+        o, j = h + nv + 4 * r, h + iv
+        W[o], W[o + 1], W[o + 2], W[o + 3] = p0, p1, p2, p3
+        # v_lin = Rᵀ ṙ (rotation by the conjugate), ω unchanged
+        x0, x1, x2 = rotate(p0, -p1, -p2, -p3, V[iv + 3], V[iv + 4], V[iv + 5])
+        W[j], W[j + 1], W[j + 2] = x0, x1, x2
+        W[j + 3], W[j + 4], W[j + 5] = V[iv], V[iv + 1], V[iv + 2]
+
+
+@njit(f"void({_VEC}, {_VEC})", cache=True, error_model="numpy")
+def vdot_from_a(W, a):
+    n, nv = int(W[0]), a.shape[0]
+    h = 1 + 2 * n
+    for r in range(n):
+        iv = int(W[2 + 2 * r])
+        o, j = h + nv + 4 * r, h + iv
+        p0, p1, p2, p3 = W[o], W[o + 1], W[o + 2], W[o + 3]
+        c0, c1, c2 = cross(W[j + 3], W[j + 4], W[j + 5], W[j], W[j + 1], W[j + 2])
+        x0, x1, x2 = rotate(p0, p1, p2, p3, a[iv] + c0, a[iv + 1] + c1, a[iv + 2] + c2)
+        a[iv], a[iv + 1], a[iv + 2] = a[iv + 3], a[iv + 4], a[iv + 5]
+        a[iv + 3], a[iv + 4], a[iv + 5] = x0, x1, x2
+
+
+def _entry(kernel):
+    """The compiled entry point of a kernel with one explicit signature: the call without
+    numba's type dispatch (≈ 0.15 µs less). It does not check dtype or layout, so it is only
+    for arguments whose types the caller guarantees. The dispatcher itself where numba
+    keeps no such entry (NUMBA_DISABLE_JIT=1, other numba versions)."""
+    try:
+        (cres,) = kernel.overloads.values()
+        entry = cres.entry_point
+    except (AttributeError, ValueError):
+        return kernel
+    return entry if callable(entry) else kernel
+
+
+#: vdot_from_a for the model's own arrays (W, and the float64 vector Pinocchio returns)
+vdot_from_a_unchecked = _entry(vdot_from_a)
