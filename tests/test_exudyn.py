@@ -259,3 +259,29 @@ def test_bench_free_bodies_exudyn_dopri5_native():
     q_rv = convert_q(ep, ep.q0, rv)                      # EP -> rotation vector -> EP
     np.testing.assert_allclose(convert_q(rv, q_rv, ep), ep.q0, atol=1e-15)
     assert bench.pose_error(rv, q_rv, rv.q0) < 1e-15
+
+
+def test_drop_in_dop853_interpolates_exudyn_output_steps():
+    """SolveDynamic(method="dop853"): Exudyn's 400 output steps are interpolated (dense
+    output), not forced as step ends, and the sensor values at those times match the
+    independent plain-quaternion reference (EP heavy top with its spherical joint)."""
+    from exudyn.utilities import SensorNode
+    T, n_out = 0.2, 400
+    SC, mbs, node = em.heavy_top(em.EP, assemble=False)
+    sens = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+                                    outputVariableType=exu.OutputVariableType.RotationMatrix))
+    mbs.Assemble()
+    SolveDynamic(mbs, em.settings(T, n_out, sensors=True), method="dop853", group="SO3xR3",
+                 rtol=1e-10, atol=1e-10)
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and st["exudyn_steps"] == n_out
+    assert st["n_steps"] < n_out / 4                  # output times do not shorten the steps
+    data = mbs.GetSensorStoredData(sens)
+    t = data[:, 0]
+    assert len(t) >= 20 and t[-1] == pytest.approx(T)          # Exudyn samples sensors every 0.01 s
+    sol = ref.heavy_top(T, t_eval=t[1:])
+    errs = []
+    for k in range(len(t) - 1):
+        p = sol.y[:4, k]
+        errs.append(np.abs(data[k + 1, 1:].reshape(3, 3) - ref.qmat(p / np.linalg.norm(p))).max())
+    assert max(errs) < 1e-8, max(errs)
