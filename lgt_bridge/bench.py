@@ -4,7 +4,9 @@ Every combination of method x group x chart x setting (tolerance for adaptive
 methods, step for fixed-step ones) runs on the scene; each run's end state is
 compared with a tight reference (dopri5 on SE(3)/exp at rtol = atol = 1e-12,
 stated in the report). Runs execute in parallel worker processes. Output: a JSON of
-every run and a Markdown table.
+every run, a Markdown table and (with matplotlib) PNG plots. Every option is checked
+(:func:`check_options`) before the reference run; a run that fails (an exception in the
+run or in its worker) becomes a row with ``success = False`` and its error.
 
 A scene is a built-in name (see SCENES) or ``path/to/file.py:function`` where the
 function returns ``(model, t_end)``.
@@ -12,7 +14,6 @@ function returns ``(model, t_end)``.
 import importlib.util
 import json
 import os
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -23,6 +24,8 @@ import numpy as np
 
 from . import scenes as _scenes
 from .errors import InputError
+from .integrators import METHODS
+from .progress import Progress
 from .groups import quaternion as _q
 from .groups import so3
 from .plugins import adapters
@@ -128,11 +131,59 @@ def pose_errors(model, q, q_ref):
     return e_rot, e_pos
 
 
+_SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
+
+
+def check_options(spec, methods, groups, charts, tols, dts):
+    """InputError on the first bad option, before anything runs (the scene is looked up,
+    not built)."""
+    if not methods:
+        raise InputError("bench: --methods is empty.")
+    for m in methods:
+        if not (m in METHODS or (m.startswith("scipy:") and m[6:] in _SCIPY)):
+            raise InputError(f"bench: unknown method {m!r}; use {', '.join(METHODS)} or scipy:<Name> "
+                             f"with Name in {', '.join(_SCIPY)}.")
+    for opt, vals, ok in (("--groups", groups, ("SE3", "SO3xR3", "auto")), ("--charts", charts, ("exp", "cay", "auto"))):
+        if not vals:
+            raise InputError(f"bench: {opt} is empty.")
+        for v in vals:
+            if v not in ok:
+                raise InputError(f"bench {opt}: unknown value {v!r}; use {', '.join(ok)}.")
+    for opt, vals, needed in (("--tols", tols, any(m not in FIXED for m in methods)),
+                              ("--dts", dts, any(m in FIXED for m in methods))):
+        if needed and not vals:
+            raise InputError(f"bench: {opt} is empty but the methods need it.")
+        for v in vals:
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"bench {opt}: {v:g} must be a positive finite number.")
+    get_scene(spec)
+
+
+def _failed_row(method, group, chart, setting, exc, wall=0.0):
+    return dict(method=method, group=group, chart=chart, setting=("dt" if method in FIXED else "tol"),
+                value=setting, success=False, message=f"{type(exc).__name__}: {' '.join(str(exc).split())}",
+                wall_s=wall, n_f=None, n_steps=None, n_rejected=None)
+
+
+def _job_failed(job, exc):
+    if job[0] is _one_native:
+        return _failed_row(job[2], "native", "engine", job[3], exc)
+    return _failed_row(*job[2:6], exc)
+
+
 def _one(spec, method, group, chart, setting, q_ref, V_ref):
+    t0 = time.perf_counter()
+    try:
+        return _one_run(spec, method, group, chart, setting, q_ref, V_ref)
+    except Exception as exc:            # a failing run is a row of the sweep, not its end
+        return _failed_row(method, group, chart, setting, exc, time.perf_counter() - t0)
+
+
+def _one_run(spec, method, group, chart, setting, q_ref, V_ref):
     model, T = load_scene(spec)
     kw = dict(dt=setting) if method in FIXED else dict(rtol=setting, atol=setting)
     t0 = time.perf_counter()
-    r = simulate(model, (0.0, T), method=method, group=group, chart=chart, **kw)
+    r = simulate(model, (0.0, T), method=method, group=group, chart=chart, progress=False, **kw)
     wall = time.perf_counter() - t0
     row = dict(method=method, group=group, chart=chart, setting=("dt" if method in FIXED else "tol"),
                value=setting, success=r.success, message=r.message, wall_s=wall,
@@ -200,14 +251,19 @@ def _executor(workers, scheduler):
     return (lambda fn, *a: client.submit(fn, *a, pure=False)), distributed.as_completed, close
 
 
-def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=True, scheduler=None, auto=True,
+def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None, scheduler=None, auto=True,
           natives=True):
     """Run the sweep; returns (reference dict, rows). With ``auto`` every method also
     runs with group = chart = "auto"; with ``natives`` the scene's engine solvers run
-    too (group "native"). ``scheduler``: see :func:`_executor`."""
+    too (group "native"). ``scheduler``: see :func:`_executor`. ``progress``: bars for
+    the reference run and the sweep, as in :func:`~lgt_bridge.simulate` (None: only
+    when long, on a terminal, outside CI)."""
+    check_options(spec, methods, groups, charts, tols, dts)
+    if workers is not None and workers < 1:
+        raise InputError(f"bench: workers = {workers} must be at least 1.")
     model, T = load_scene(spec)
     t0 = time.perf_counter()
-    ref = simulate(model, (0.0, T), t_eval=[0.0, T], **REFERENCE)
+    ref = simulate(model, (0.0, T), t_eval=[0.0, T], progress=progress, **REFERENCE)
     if not ref.success:
         raise InputError(f"bench: the reference run failed ({ref.message}).")
     reference = dict(REFERENCE, n_steps=ref.stats["n_steps"], wall_s=time.perf_counter() - t0, t_end=T)
@@ -218,20 +274,29 @@ def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=True,
         jobs += [(_one_native, spec, name, s, ref.q[-1]) for name, (_, settings, _) in
                  get_scene(spec).natives.items() for s in settings]
     rows = []
+    bar = Progress(progress, len(jobs), lambda: (len(rows), f"{sum(not r['success'] for r in rows)} failed"),
+                   desc="sweep", unit=" runs", value_fmt="d")
     workers = workers or os.cpu_count() or 1
     if workers == 1 and scheduler is None:
-        for k, j in enumerate(jobs):
-            rows.append(j[0](*j[1:]))
-            _bar(progress, k + 1, len(jobs))
+        for j in jobs:
+            try:
+                rows.append(j[0](*j[1:]))
+            except Exception as exc:            # a failing run is a row of the sweep, not its end
+                rows.append(_job_failed(j, exc))
+            bar.step()
     else:
         submit, completed, close = _executor(workers, scheduler)
         try:
-            futs = [submit(*j) for j in jobs]
-            for k, f in enumerate(completed(futs)):
-                rows.append(f.result())
-                _bar(progress, k + 1, len(jobs))
+            futs = {submit(*j): j for j in jobs}
+            for f in completed(list(futs)):
+                try:
+                    rows.append(f.result())
+                except Exception as exc:        # the worker itself failed: still a row
+                    rows.append(_job_failed(futs[f], exc))
+                bar.step()
         finally:
             close()
+    bar.close()
     rows.sort(key=lambda r: (r["method"], r["group"], r["chart"], -r["value"]))
     return reference, rows
 
@@ -281,14 +346,6 @@ def front_gaps(rows):
                         wall_ratio_same_method=ratio(a, same, "wall_s"), n_f_ratio_same_method=ratio(a, same, "n_f"),
                         n_f_ratio_all=ratio(a, others, "n_f")))
     return out
-
-
-def _bar(on, k, n):
-    if on:
-        sys.stderr.write(f"\r[{'#' * int(30 * k / n):<30}] {k}/{n} runs")
-        if k == n:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
 
 
 def _f(v, fmt):

@@ -1,67 +1,203 @@
-"""Command line: ``lgt-bridge demo`` (more subcommands join as they land)."""
+"""Command line: ``lgt-bridge demo | run | bench``.
+
+Errors raised on purpose (:class:`~lgt_bridge.errors.LGTError` and subclasses, a missing
+script, an unknown scene, a bad option value) print ``lgt-bridge: error: <message>`` on
+stderr and exit with status 2; ``--debug`` shows their traceback. Unexpected exceptions
+keep their traceback.
+"""
 import argparse
 import sys
+
+from .errors import InputError, LGTError
+
+_GROUPS = ("SE3", "SO3xR3", "auto")
+_CHARTS = ("exp", "cay", "auto")
+_SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
+
+
+def _methods():
+    from .integrators import METHODS
+    return METHODS
+
+
+def check_method(m, where):
+    """InputError unless ``m`` names a bridge method or 'scipy:<Name>'."""
+    ok = m in _methods() or (m.startswith("scipy:") and m[6:] in _SCIPY)
+    if not ok:
+        raise InputError(f"{where}: unknown method {m!r}; use one of {', '.join(_methods())} "
+                         f"or scipy:<Name> with Name in {', '.join(_SCIPY)}.")
+
+
+def _one_line(exc):
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose epilog may be computed when help is shown (``epilog_fn``)."""
+
+    epilog_fn = None
+
+    def format_help(self):
+        if self.epilog_fn is not None:
+            self.epilog = self.epilog_fn()
+        return super().format_help()
 
 
 def _run_script(a):
     """Execute ``a.script`` as __main__ with every registered adapter's solver routing active."""
     import contextlib
+    import os
     import runpy
     import time
 
     from .plugins import adapters
-    options = dict(method=a.method, group=a.group, chart=a.chart, rtol=a.rtol, atol=a.atol)
+    if not os.path.isfile(a.script):
+        raise InputError(f"run: no script file {a.script!r}.")
+    check_method(a.method, "run --method")
+    for name, v in (("--rtol", a.rtol), ("--atol", a.atol)):
+        if v is not None and not (v > 0 and v < float("inf")):
+            raise InputError(f"run {name} = {v}: must be a positive number.")
+    options = dict(method=a.method, group=a.group, chart=a.chart, rtol=a.rtol, atol=a.atol,
+                   progress=a.progress)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         routed = []
         for name, ep in sorted(adapters().items()):
             try:
                 plugin = ep.load()
-            except ImportError:
+                if hasattr(plugin, "patch"):
+                    routed.append((name, getattr(plugin, "routes", ()),
+                                   stack.enter_context(plugin.patch(options))))
+            except ImportError:                 # the engine of this adapter is not installed
                 continue
-            if hasattr(plugin, "patch"):
-                routed.append((name, stack.enter_context(plugin.patch(options))))
         if not routed:
-            print("lgt-bridge run: no engine adapter is installed (pip install 'lgt-bridge[exudyn]').",
-                  file=sys.stderr)
-            return 2
+            raise InputError("run: no engine adapter with solver routing is installed "
+                             "(pip install 'lgt-bridge[exudyn]').")
         sys.argv = [a.script]
         runpy.run_path(a.script, run_name="__main__")
-    n = sum(len(calls) for _, calls in routed)
+    n = sum(len(calls) for _, _, calls in routed)
+    wall = time.perf_counter() - t0
+    tols = (f"rtol={a.rtol:g}, atol={a.atol:g}" if a.rtol is not None and a.atol is not None else
+            "tolerances as printed per call")
+    if n == 0:
+        names = ", ".join(r for _, routes, _ in routed for r in routes) or "none"
+        print(f"lgt-bridge run: note: {a.script} made no solver call the bridge can route, so it "
+              f"ran exactly as written ({wall:.2f} s). Routed calls: {names}. A hand-written "
+              "loop (e.g. Pinocchio's pin.aba + pin.integrate) is not routed: wrap the model "
+              "instead, model = lgt_pinocchio.PinocchioModel(pin_model, q0=q, v0=v) and "
+              "lgt_bridge.simulate(model, (0, T), method=...) (examples/pinocchio_humanoid_bridge.py).",
+              file=sys.stderr)
+        return 0
     print(f"lgt-bridge run: {a.script}: {n} solver call(s) routed through the bridge "
-          f"({a.method}, {a.group}, {a.chart}); total {time.perf_counter() - t0:.2f} s")
+          f"({a.method}, group {a.group}, chart {a.chart}, {tols}); total {wall:.2f} s")
     return 0
 
 
-def main(argv=None):
+def _floats(s, opt):
+    out = []
+    for x in s.split(","):
+        if not x.strip():
+            continue
+        try:
+            out.append(float(x))
+        except ValueError:
+            raise InputError(f"bench {opt}: {x!r} is not a number.") from None
+    return out
+
+
+def _bench(a):
+    from . import bench
+    words = lambda s: [x.strip() for x in s.split(",") if x.strip()]   # noqa: E731
+    methods, groups, charts = words(a.methods), words(a.groups), words(a.charts)
+    tols, dts = _floats(a.tols, "--tols"), _floats(a.dts, "--dts")
+    if a.workers is not None and a.workers < 1:
+        raise InputError(f"bench --workers = {a.workers}: must be at least 1.")
+    ref, rows = bench.sweep(a.scene, methods, groups, charts, tols, dts, workers=a.workers,
+                            scheduler=a.scheduler or a.dask, auto=not a.no_auto, progress=a.progress)
+    path = bench.write_report(a.out, a.scene, ref, rows, plots=not a.no_plots)
+    print(path.read_text())
+    return 0
+
+
+def _scene_epilog():
+    from .bench import all_scenes
+    try:
+        scenes = all_scenes()
+    except Exception as exc:            # help must not fail on a broken adapter
+        return f"scenes: (could not list the engines' scenes: {exc})"
+    lines = ["scenes (built-in, then those of the installed engine adapters):"]
+    lines += [f"  {k:<22} {v.about}" for k, v in scenes.items()]
+    lines += ["  path/to/file.py:func   your own: func() returns (model, t_end)",
+              "  extremes               the extremes suite's report",
+              "",
+              "files written into --out (default bench-results/):",
+              "  bench_<scene>.json     every run: settings, errors, f evaluations, steps, wall time",
+              "  bench_<scene>.md       the report: table of runs, cheapest at 1e-6, auto vs the front",
+              "  <scene>_error_vs_wall.png, <scene>_error_vs_nf.png, <scene>_energy_drift.png",
+              "                         work-precision and energy plots (with matplotlib; --no-plots: none)"]
+    return "\n".join(lines)
+
+
+def _parser():
     ap = argparse.ArgumentParser(prog="lgt-bridge", description="Lie group integration of "
                                  "absolute-coordinate multibody models (Exudyn, Pinocchio).")
-    sub = ap.add_subparsers(dest="cmd")
+    ap.add_argument("--debug", action="store_true", help="show the traceback of errors")
+    sub = ap.add_subparsers(dest="cmd", parser_class=_Parser)
+    debug = dict(action="store_true", default=argparse.SUPPRESS, help="show the traceback of errors")
+    progress = dict(action=argparse.BooleanOptionalAction, default=None,
+                    help="progress bars on stderr (default: only for runs longer than about 1 s "
+                         "when stderr is a terminal, never when CI is set or output is piped)")
     d = sub.add_parser("demo", help="heavy top on several method x group x chart choices: "
                        "error against a tight reference, f evaluations, wall time")
     d.add_argument("--T", type=float, default=0.1, help="end time in s (default 0.1)")
     d.add_argument("--param", default="quat", choices=["quat", "rotvec", "rxyz"],
                    help="absolute rotation coordinates of the top (default quat)")
     d.add_argument("--pivot", action="store_true", help="frame at the pivot instead of the joint form")
+    d.add_argument("--debug", **debug)
     r = sub.add_parser("run", help="run an unmodified engine script with its solver calls "
-                       "(Exudyn SolveDynamic) routed through the bridge")
+                       "(Exudyn SolveDynamic) routed through the bridge",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Run SCRIPT unchanged as __main__; every exu.SolveDynamic /\n"
+                       "mbs.SolveDynamic call it makes is integrated by the bridge (the script's\n"
+                       "sensors, solution file and final state keep working). Other solver calls and\n"
+                       "hand-written loops (e.g. a Pinocchio aba loop) run as written.",
+                       epilog="tolerances: adaptive methods (dopri5, dop853, scipy:*) use --rtol/--atol;\n"
+                       "  when absent, the script's own simulationSettings.timeIntegration.\n"
+                       "  relativeTolerance/absoluteTolerance (Exudyn's defaults: 1e-8, 1e-8) if its\n"
+                       "  automaticStepSize is True, else rtol=1e-6, atol=1e-8. Fixed-step methods\n"
+                       "  (euler, rkmk2, rkmk4, genalpha) step at endTime/numberOfSteps.\n"
+                       "Each routed call prints one line: method, group, chart, tolerances, steps.")
     r.add_argument("script", help="the legacy script (.py)")
-    r.add_argument("--method", default="dopri5")
-    r.add_argument("--group", default="SE3", choices=["SE3", "SO3xR3"])
-    r.add_argument("--chart", default="exp", choices=["exp", "cay"])
-    r.add_argument("--rtol", type=float, default=None)
-    r.add_argument("--atol", type=float, default=None)
+    r.add_argument("--method", default="dopri5", metavar="METHOD",
+                   help="euler, rkmk2, rkmk4, genalpha (fixed step); dopri5, dop853 (adaptive); "
+                   "scipy:<Name> with Name in RK23, RK45, DOP853, Radau, BDF, LSODA (default dopri5)")
+    r.add_argument("--group", default="SE3", choices=_GROUPS,
+                   help="Lie group of the local coordinates; auto: per body, what the model needs "
+                   "(default SE3)")
+    r.add_argument("--chart", default="exp", choices=_CHARTS,
+                   help="local chart: exponential or Cayley; auto: per body (default exp)")
+    r.add_argument("--rtol", type=float, default=None, help="relative tolerance (see below)")
+    r.add_argument("--atol", type=float, default=None, help="absolute tolerance (see below)")
+    r.add_argument("--progress", **progress)
+    r.add_argument("--debug", **debug)
     b = sub.add_parser("bench", help="work-precision sweep of method x group x chart x tolerance/step "
-                       "on a scene, against a tight reference; writes JSON and Markdown")
-    b.add_argument("scene", help="built-in scene (heavy_top, heavy_top_pivot, free_body, chain, "
-                   "top_and_free_bodies), path/to/file.py:function returning (model, t_end), or "
-                   "'extremes' for the extremes suite's report")
-    b.add_argument("--methods", default="rkmk4,dopri5")
-    b.add_argument("--groups", default="SE3,SO3xR3")
-    b.add_argument("--charts", default="exp,cay")
-    b.add_argument("--tols", default="1e-5,1e-7,1e-9", help="tolerances of adaptive methods")
-    b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods")
-    b.add_argument("--out", default="bench-results")
+                       "on a scene, against a tight reference; writes JSON, Markdown and PNG plots",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Work-precision sweep against a tight reference (dopri5 on SE3/exp,\n"
+                       "rtol = atol = 1e-12). Every option is checked before the reference run; a run\n"
+                       "that fails becomes a row with its error.")
+    b.epilog_fn = _scene_epilog
+    b.add_argument("scene", help="a scene name (listed below), path/to/file.py:function returning "
+                   "(model, t_end), or 'extremes' for the extremes suite's report")
+    b.add_argument("--methods", default="rkmk4,dopri5",
+                   help="comma-separated: euler, rkmk2, rkmk4, genalpha, dopri5, dop853, scipy:<Name> "
+                   "(default rkmk4,dopri5)")
+    b.add_argument("--groups", default="SE3,SO3xR3", help="comma-separated: SE3, SO3xR3, auto "
+                   "(default SE3,SO3xR3)")
+    b.add_argument("--charts", default="exp,cay", help="comma-separated: exp, cay, auto (default exp,cay)")
+    b.add_argument("--tols", default="1e-5,1e-7,1e-9", help="rtol = atol of adaptive methods")
+    b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods (s)")
+    b.add_argument("--out", default="bench-results", help="output directory (default bench-results)")
     b.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     b.add_argument("--scheduler", default=None, help="run the sweep on a Dask cluster at this address "
                    "(tcp://host:port)")
@@ -70,30 +206,36 @@ def main(argv=None):
     b.add_argument("--no-plots", action="store_true", help="Markdown and JSON only")
     b.add_argument("--long-steps", type=int, default=1_000_000,
                    help="extremes: steps of the long run per method (default 10⁶)")
-    a = ap.parse_args(argv)
+    b.add_argument("--progress", **progress)
+    b.add_argument("--debug", **debug)
+    return ap
+
+
+def _dispatch(a):
     if a.cmd == "bench" and a.scene == "extremes":
         from . import extremes
         path = extremes.write_report(a.out, long_steps=a.long_steps)
         print(path.read_text())
         return 0
     if a.cmd == "bench":
-        from . import bench
-        floats = lambda s: [float(x) for x in s.split(",") if x]   # noqa: E731
-        words = lambda s: [x for x in s.split(",") if x]           # noqa: E731
-        ref, rows = bench.sweep(a.scene, words(a.methods), words(a.groups), words(a.charts),
-                                floats(a.tols), floats(a.dts), workers=a.workers,
-                                scheduler=a.scheduler or a.dask, auto=not a.no_auto)
-        path = bench.write_report(a.out, a.scene, ref, rows, plots=not a.no_plots)
-        print(path.read_text())
-        return 0
+        return _bench(a)
     if a.cmd == "run":
         return _run_script(a)
-    if a.cmd in (None, "demo"):
-        from . import demo
-        demo.run(sys.stdout, T=getattr(a, "T", 0.1), param=getattr(a, "param", "quat"),
-                 constrained=not getattr(a, "pivot", False))
-        return 0
-    return 2
+    from . import demo
+    demo.run(sys.stdout, T=getattr(a, "T", 0.1), param=getattr(a, "param", "quat"),
+             constrained=not getattr(a, "pivot", False))
+    return 0
+
+
+def main(argv=None):
+    a = _parser().parse_args(argv)
+    try:
+        return _dispatch(a)
+    except LGTError as exc:
+        if a.debug:
+            raise
+        print(f"lgt-bridge: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

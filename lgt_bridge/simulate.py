@@ -1,5 +1,4 @@
 """``simulate``: run a model on a bridge integrator and collect the result."""
-import sys
 import time
 from dataclasses import dataclass, field
 
@@ -13,6 +12,7 @@ from .integrators.constraints import Projector
 from .integrators.local import make_problem
 from .integrators.rkmk import AdaptiveRK, FixedRK
 from .integrators.tableaux import ADAPTIVE, FIXED
+from .progress import simulation_bar
 
 _SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
@@ -77,6 +77,7 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
             raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                              "give a finite initial state.")
     _validate_bodies(lay, q0)
+    _check_mass(model, q0)
     if t_eval is not None:
         t_eval = np.asarray(t_eval, float).ravel()
         if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):
@@ -106,23 +107,106 @@ def _validate_bodies(lay, q0):
             raise
 
 
-class _Progress:
-    def __init__(self, on, t0, t1):
-        self.on, self.t0, self.t1 = on, t0, t1
-        self.last = 0.0
+#: dense mass-matrix checks above this many velocities are skipped (memory: 8 nv² bytes)
+MASS_CHECK_MAX_NV = 2000
 
-    def __call__(self, t, n, final=False):
-        if not self.on:
-            return
-        now = time.perf_counter()
-        if final or now - self.last > 0.25:
-            self.last = now
-            frac = (t - self.t0) / (self.t1 - self.t0)
-            bar = "#" * int(30 * frac)
-            sys.stderr.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  t = {t:.6g}  steps = {n}")
-            if final:
-                sys.stderr.write("\n")
-            sys.stderr.flush()
+
+def mass_defects(M, A=None, rtol=None):
+    """Directions in which the mass matrix M cannot be inverted: a list of
+    (velocity index, scaled eigenvalue), empty when M is positive definite (on the null
+    space of the constraint Jacobian A, if given: what the index-1 solve needs).
+
+    The test is scale-free: M is scaled symmetrically by its diagonal (so kilograms and
+    kg m² compare), a zero or negative diagonal entry is a defect of its own index, and an
+    eigenvalue of the scaled matrix below ``rtol`` (default max(1e-12, 100 n eps)) is a
+    defect named by the largest entry of its eigenvector. Independent diagonal blocks
+    (the block-diagonal M of free bodies) are checked block by block."""
+    M = np.asarray(M, float)
+    n = len(M)
+    if n == 0:
+        return []
+    if not np.isfinite(M).all():
+        i = int(np.flatnonzero(~np.isfinite(M).all(axis=1))[0])
+        return [(i, float("nan"))]
+    M = 0.5 * (M + M.T)
+    rtol = max(1e-12, 100 * n * np.finfo(float).eps) if rtol is None else rtol
+    d = np.diag(M).copy()
+    dmax = float(np.abs(d).max())
+    if dmax == 0.0:
+        return [(i, 0.0) for i in range(n)]
+    bad = np.flatnonzero(d <= rtol * dmax)
+    if len(bad):
+        return [(int(i), float(d[i] / dmax)) for i in bad]
+    s = 1.0 / np.sqrt(d)
+    S = M * s[:, None] * s[None, :]
+    if A is not None and len(A):
+        # M restricted to the motions the constraints allow: Zᵀ S Z, Z an orthonormal basis
+        # of the null space of A D^(-1/2) (redundant constraints are fine)
+        As = np.asarray(A, float) * s[None, :]
+        _, sv, Vt = np.linalg.svd(As)
+        rank = int((sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)).sum())
+        Z = Vt[rank:].T
+        if Z.shape[1] == 0:
+            return []
+        w, U = np.linalg.eigh(Z.T @ S @ Z)
+        U = Z @ U
+        return [(int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol)]
+    out = []
+    for idx in _diagonal_blocks(S):
+        w, U = np.linalg.eigh(S[np.ix_(idx, idx)])
+        out += [(int(idx[np.argmax(np.abs(U[:, k]))]), float(w[k])) for k in np.flatnonzero(w <= rtol)]
+    return out
+
+
+def _diagonal_blocks(S):
+    """Index sets of the independent diagonal blocks of the symmetric S (its connected
+    components); one block when S is mostly nonzero."""
+    n = len(S)
+    nz = S != 0.0
+    if n <= 12 or nz.sum() > 0.25 * n * n:
+        return [np.arange(n)]
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+    k, labels = connected_components(csr_matrix(nz), directed=False)
+    order = np.argsort(labels, kind="stable")
+    return np.split(order, np.cumsum(np.bincount(labels, minlength=k))[:-1])
+
+
+def _check_mass(model, q0):
+    """Reject, before any step, a model whose mass matrix at q0 is singular or indefinite
+    (e.g. links with zero inertia): an explicit adaptive method would otherwise grind to
+    max_steps. A model may provide ``check_mass_matrix(q)`` (raising InputError itself and
+    naming its own joints); otherwise a model with ``mass_matrix`` is checked densely (up to
+    MASS_CHECK_MAX_NV velocities; block by block when M is block-diagonal), on the null
+    space of the constraint Jacobian when it has constraints (a singular M is then fine
+    when the constraints hold the singular direction)."""
+    own = getattr(model, "check_mass_matrix", None)
+    if own is not None:
+        own(q0)
+        return
+    if not model.has_mass_matrix or model.layout.nv > MASS_CHECK_MAX_NV:
+        return
+    M = model.mass_matrix(q0)
+    A = model.constraint_jacobian(q0) if model.n_constraints else None
+    defects = mass_defects(M, A)
+    if defects:
+        raise InputError(mass_message(defects, [model.layout.owner("V", i) for i, _ in defects]))
+
+
+def mass_message(defects, owners):
+    """InputError text for ``mass_defects`` output; ``owners`` names each defect's index."""
+    i, lam = defects[0]
+    kind = "indefinite" if lam < 0 else "singular"
+    names = list(dict.fromkeys(owners))
+    more = ""
+    if len(defects) > 1:
+        more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
+                + (", ..." if len(names) > 6 else ""))
+    return (f"mass matrix at q0 is {kind}: the motion of {owners[0]} (velocity index {i}) has "
+            f"{'negative' if lam < 0 else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
+            "Its acceleration is undefined and an integrator would fail or crawl to max_steps. "
+            "Give every moving body a positive mass and positive principal inertias (a "
+            "zero-inertia link: merge it into its parent, or add a small rotor inertia/armature).")
 
 
 def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
@@ -204,7 +288,7 @@ class Driver:
 
 
 def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
-             atol=1e-8, q0=None, V0=None, t_eval=None, progress=False, max_steps=1_000_000,
+             atol=1e-8, q0=None, V0=None, t_eval=None, progress=None, max_steps=1_000_000,
              project=True, rho_inf=0.9, newton_tol=1e-10):
     """Integrate ``model`` over ``t_span`` with a Lie group method through τ.
 
@@ -220,6 +304,12 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     t_eval: output times; default: every step. Fixed-step methods land on them;
     dopri5 and dop853 interpolate them with their continuous extension (through τ),
     so output times never shorten their steps.
+    progress: None (default) shows a tqdm bar on stderr (simulated time, steps, f
+    evaluations, current step size, rate) once the run has taken more than about 1 s,
+    and only when stderr is a terminal and the environment variable ``CI`` is unset;
+    True always shows it, False never (:mod:`lgt_bridge.progress`).
+    max_steps: the most accepted steps the run may take (default 10⁶); reaching it ends
+    the run with ``success = False`` and a message saying so, keeping the steps computed.
     """
     t0, t1, q0, V0, t_eval = _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval,
                                            max_steps)
@@ -236,12 +326,12 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     targets = [t1] if record_all else [t for t in t_eval if t > t0]
     if record_all or t_eval[0] == t0:
         ts.append(t0), qs.append(q0.copy()), Vs.append(V0.copy())
-    bar = _Progress(progress, t0, t1)
+    bar = simulation_bar(progress, t0, t1, drv, stepper)
 
     def on_step(t, q, V):
         if record_all:
             ts.append(t), qs.append(q.copy()), Vs.append(V.copy())
-        bar(t, drv.n_steps)
+        bar.step()
 
     success, message = True, "reached the end of t_span"
     try:
@@ -257,10 +347,11 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
             err.result = _result(ts, qs, Vs, False, str(exc), stepper, drv.n_steps, wall0,
                                  method, group, chart, model)
             model.write_back(stepper.q, stepper.V, drv.t)
+            bar.close()
             raise err from None
         success, message = False, str(exc)
         model.write_back(stepper.q, stepper.V, drv.t)
-    bar(drv.t, drv.n_steps, final=True)
+    bar.close()
     res = _result(ts, qs, Vs, success, message, stepper, drv.n_steps, wall0, method, group, chart, model)
     if choice is not None:
         res.stats["auto"] = choice.as_dicts()

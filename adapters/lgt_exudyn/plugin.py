@@ -3,6 +3,8 @@
 
 class _ExudynPlugin:
     name = "exudyn"
+    #: the solver calls ``lgt-bridge run`` routes through the bridge (see :meth:`patch`)
+    routes = ("exu.SolveDynamic", "exudyn.solver.SolveDynamic", "mbs.SolveDynamic")
 
     @staticmethod
     def accepts(obj):

@@ -6,11 +6,11 @@ from contextlib import contextmanager
 def route_solve_dynamic(options):
     """While active, ``exu.SolveDynamic``, ``exudyn.solver.SolveDynamic`` and
     ``mbs.SolveDynamic`` run :func:`lgt_exudyn.SolveDynamic` with ``options``
-    (method, group, chart, rtol, atol). Yields the list of per-call statistics."""
+    (method, group, chart, rtol, atol, progress). Yields the list of per-call statistics."""
     import exudyn
     import exudyn.solver
 
-    from .solve import SolveDynamic
+    from .solve import SolveDynamic, describe
 
     calls = []
     original = exudyn.solver.SolveDynamic
@@ -21,7 +21,7 @@ def route_solve_dynamic(options):
                           showHints, showCausingItems, autoAssemble, **options)
         st = mbs.sys["lgtBridgeStats"]
         calls.append(st)
-        print(f"lgt-bridge: SolveDynamic #{len(calls)} ran {st['method']} on {st['group']}/{st['chart']}: "
+        print(f"lgt-bridge: SolveDynamic #{len(calls)} ran {describe(st)}; "
               f"{st['n_steps']} steps ({st['n_rejected']} rejected), {st['n_f']} f evaluations, "
               f"{st['wall_s']:.3f} s wall")
         return ok
