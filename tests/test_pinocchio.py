@@ -137,7 +137,7 @@ def test_bad_input():
         PinocchioModel(model, q0=bad)
     with pytest.raises(InputError, match="sizes nq = 7, nv = 6"):
         PinocchioModel(model, q0=q, v0=np.zeros(7))
-    with pytest.raises(InputError, match="entry 2 is nan"):
+    with pytest.raises(InputError, match=r"entry 2 \(joint 'root' \(Pinocchio joint 1\)\) is nan"):
         PinocchioModel(model, v0=np.array([0, 0, np.nan, 0, 0, 0]))
     with pytest.raises(InputError, match="one per joint, model.njoints = 2"):
         PinocchioModel(model, fext=lambda t, q, v: [pin.Force.Zero()])

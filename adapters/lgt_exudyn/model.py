@@ -90,6 +90,8 @@ class ExudynModel(Model):
         self.q0 = np.array(sd.GetODE2Coordinates()) + self.ref
         self.V0 = self.twist_from_rates(self.q0, np.array(sd.GetODE2Coordinates_t()))
         for k, b in enumerate(bodies):
+            if self.kinds[k][0] == "RigidBodyEP":
+                self._check_euler_parameters(b)
             b.param.validate(self.q0[[*b.pos, *b.rot]], f"initial coordinates of Exudyn node '{b.name}'")
         if not np.isfinite(self.V0).all():
             i = int(np.flatnonzero(~np.isfinite(self.V0))[0])
@@ -98,6 +100,24 @@ class ExudynModel(Model):
         self._so3xr3 = {}
         self.n_eval = 0
         self._detect_constant_mass()
+
+    def _check_euler_parameters(self, b):
+        """InputError when a node's total Euler parameters (reference + initial: Exudyn adds
+        them component-wise) are not a unit quaternion, showing both parts."""
+        from lgt_bridge._checks import QUAT_NORM_TOL
+        rot = list(b.rot)
+        p, ref = self.q0[rot], self.ref[rot]
+        norm = float(np.sqrt(p @ p))
+        if np.isfinite(norm) and abs(norm - 1.0) <= QUAT_NORM_TOL:
+            return
+        fmt = lambda a: "[" + ", ".join(f"{x:.6g}" for x in a) + "]"     # noqa: E731
+        raise InputError(
+            f"Exudyn node '{b.name}': its Euler parameters reference + initial coordinates = "
+            f"{fmt(ref)} + {fmt(p - ref)} = {fmt(p)} have norm {norm:.12g} (off by {abs(norm - 1.0):.3g} "
+            f"> {QUAT_NORM_TOL:g}). Exudyn adds referenceCoordinates and initialCoordinates component-"
+            "wise, so their sum must be a unit quaternion: put the rotation in referenceCoordinates "
+            "(or initialRotationMatrix of CreateRigidBody) and leave the initial rotation "
+            "coordinates at zero, or make the sum unit.")
 
     def _init_solver(self):
         """The evaluator: its own solver object, writing no files and no sensors."""

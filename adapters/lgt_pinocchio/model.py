@@ -46,6 +46,31 @@ def _kernels():
     return _K
 
 
+def _check_pin_model(pin, model):
+    if isinstance(model, pin.Model):
+        return
+    if isinstance(model, pin.Data):
+        raise InputError("PinocchioModel: got a pinocchio.Data; pass the pinocchio.Model it was created "
+                         "from (e.g. PinocchioModel(model), not PinocchioModel(data)): the adapter makes "
+                         "its own Data with model.createData().")
+    hint = " (a RobotWrapper: pass robot.model)" if isinstance(getattr(model, "model", None), pin.Model) else ""
+    raise InputError(f"PinocchioModel: expected a pinocchio.Model, got a {type(model).__name__}{hint}.")
+
+
+def _check_signature(fn, name, expected):
+    """InputError unless ``fn`` can be called with three positional arguments (t, q, v)."""
+    import inspect
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):       # builtins without a signature: checked by the first call
+        return
+    try:
+        sig.bind(0.0, None, None)
+    except TypeError:
+        raise InputError(f"{name}: expected a callable {expected}; {getattr(fn, '__name__', name)}"
+                         f"{sig} cannot be called with the three arguments (t, q, v).") from None
+
+
 class PinocchioModel(Model):
     """A ``pinocchio.Model`` for :func:`lgt_bridge.simulate.simulate`.
 
@@ -63,6 +88,7 @@ class PinocchioModel(Model):
 
     def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None):
         pin = self.pin = _pin()
+        _check_pin_model(pin, model)
         self.compiled = _backend.compiled(backend)
         self.model, self.data = model, model.createData()
         bodies, vq, vv = [], [], []
@@ -94,6 +120,13 @@ class PinocchioModel(Model):
         self._riq = np.array([r[0] for r in self.roots], int)
         self._riv = np.array([r[1] for r in self.roots], int)
         self._tau = tau
+        if callable(tau):
+            _check_signature(tau, "tau", "tau(t, q, v) returning the joint torques (size nv)")
+        if callable(fext):
+            _check_signature(fext, "fext", "fext(t, q, v) returning one force per joint")
+        elif fext is not None:
+            raise InputError(f"fext: expected None or a callable fext(t, q, v) returning one force per "
+                             f"joint, got a {type(fext).__name__}.")
         if tau is not None and not callable(tau):
             tau = np.asarray(tau, float)
             if tau.shape != (self.nv,) or not np.isfinite(tau).all():
@@ -109,7 +142,9 @@ class PinocchioModel(Model):
         for name, arr in (("q0", q0), ("v0", v0)):
             if not np.isfinite(arr).all():
                 i = int(np.flatnonzero(~np.isfinite(arr))[0])
-                raise InputError(f"{name}: entry {i} is {arr[i]}; give a finite initial state.")
+                kind = "q" if name == "q0" else "v"
+                raise InputError(f"{name}: entry {i} ({self.joint_of(kind, i)}) is {arr[i]}; give a "
+                                 "finite initial state.")
         for b in bodies:
             b.validate(q0, f"q0 of joint {b.name!r}")
         self.q0 = q0
@@ -124,6 +159,47 @@ class PinocchioModel(Model):
         self._torques(0.0, q0, v0)
         if fext is not None:
             self._forces(0.0, q0, v0)
+
+    def joint_of(self, kind, index):
+        """The joint that owns entry ``index`` of q (kind 'q') or of v / V (kind 'v'), for messages:
+        "joint 'l_hip_pitch' (Pinocchio joint 3)"."""
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            i0, n = (jm.idx_q, jm.nq) if kind == "q" else (jm.idx_v, jm.nv)
+            if i0 <= index < i0 + n:
+                return f"joint {self.model.names[j]!r} (Pinocchio joint {j})"
+        return f"{kind}[{index}]"
+
+    def check_mass_matrix(self, q):
+        """InputError when Pinocchio's joint-space mass matrix (CRBA) at q is singular or
+        indefinite (e.g. links with zero inertia, as in example-robot-data's iCub and Romeo),
+        naming the joints; with constraints, on the motions they allow. Called by
+        :func:`lgt_bridge.simulate.simulate` before the first step."""
+        from lgt_bridge.simulate import mass_defects
+        q = np.asarray(q, float)
+        M = self.pin.crba(self.model, self.data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        A = None
+        if self.n_constraints:
+            # A is with respect to V; v = T V, so with respect to v it is A T⁻¹
+            A = np.linalg.solve(self._T(q).T, self.constraint_jacobian(q).T).T
+        defects = mass_defects(M, A)
+        if not defects:
+            return
+        i, lam = defects[0]
+        names = list(dict.fromkeys(self.joint_of("v", k) for k, _ in defects))
+        more = ""
+        if len(defects) > 1:
+            more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
+                    + (", ..." if len(names) > 6 else ""))
+        kind = "indefinite" if lam < 0 else "singular"
+        raise InputError(
+            f"Pinocchio mass matrix (crba) at q0 is {kind}: the motion of {names[0]} (v index {i}) "
+            f"has {'negative' if lam < 0 else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
+            "Its acceleration is undefined and an integrator would fail or crawl to max_steps. "
+            "Give the links moved by these joints positive inertias, or set a rotor inertia "
+            "(e.g. model.armature[:] = 1e-3 for every joint; model.armature[idx_v] for one) "
+            "before wrapping the model.")
 
     # --- Pinocchio velocity (v_lin body, ω body) <-> model twist (ω body, ṙ inertial) ---------
     def _quats(self, q):

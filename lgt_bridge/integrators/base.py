@@ -9,9 +9,33 @@ from ..errors import StepError
 class StepFailed(Exception):
     """Internal: a step could not be completed; the driver turns it into a result."""
 
-    def __init__(self, message, error=StepError):
+    def __init__(self, message, error=StepError, diverged=False):
         super().__init__(message)
         self.error = error
+        self.diverged = diverged        # the step blew up (an adaptive method retries smaller)
+
+
+#: what to do about a diverging explicit step (and the generic advice for any method)
+DIVERGED_HINT = ("dt is beyond the method's stability limit for the stiffest mode (a stiff spring or "
+                 "contact, a fast rotation): reduce dt, or use method='genalpha' (implicit) or an "
+                 "adaptive method ('dopri5', 'dop853'). The result keeps every step before it.")
+
+
+def diverged_message(t, detail, h=None, until=False, hint=DIVERGED_HINT):
+    """StepFailed text of a step that diverged: what blew up, where, and what to do."""
+    step = f"the step to t = {t:.9g}" if until else f"the step from t = {t:.9g}"
+    if h is not None:
+        step += f" (dt = {h:.3g})"
+    return f"{step} diverged: {detail}. {hint}"
+
+
+def norm(x):
+    """Euclidean norm without floating-point warnings (inf for an overflowing sum)."""
+    m = float(np.max(np.abs(x), initial=0.0))
+    if m == 0.0 or not math.isfinite(m):
+        return m
+    y = x / m
+    return m * math.sqrt(y.dot(y))
 
 
 def first_nonfinite(layout, kind, arr):
@@ -23,6 +47,7 @@ class Stepper:
     """Holds (q, W) between steps; ``attempt(t, h)`` advances or declines."""
 
     adaptive = False
+    DIVERGED_HINT = DIVERGED_HINT      # what a diverged step of this method suggests
 
     def __init__(self, problem, projector=None):
         self.prob = problem
@@ -44,9 +69,11 @@ class Stepper:
             return
         for kind, arr in (("q", q), ("V", V)):
             if not np.isfinite(arr).all():
-                raise StepFailed(f"non-finite {kind} at t = {t:.9g} in "
-                                 f"{first_nonfinite(self.prob.layout, kind, arr)}; the model "
-                                 "returned NaN/inf or the step diverged (try a smaller dt).")
+                # every stage derivative was finite (checked per stage): the step itself overflowed
+                raise StepFailed(diverged_message(
+                    t, f"the end state has non-finite {kind} in {first_nonfinite(self.prob.layout, kind, arr)}"
+                       " although every stage derivative was finite", until=True, hint=self.DIVERGED_HINT),
+                    diverged=True)
 
     def finish(self, t1, q1, V1, W1=None, quats=None):
         """Accept (q1, V1) at t1, after projection onto the constraints if the model has them."""

@@ -124,12 +124,13 @@ class CompiledProblem(LocalProblem):
             Vd = np.ascontiguousarray(Vd, dtype=float)
         self._vd = Vd
         self._pending = (i, t, ts)
+        self._h = h
         return 0.0
 
     def _failed(self, KX, KW):
         i, t, ts = self._pending
         self._vd = _NONE
-        self.stage_failed(KX[i], KW[i], t, ts, self._q, self._V)
+        self.stage_failed(KX, KW, i, t, ts, self._q, self._V, self._h, self._W0, self._W)
 
     def flush(self, KX, KW):
         """Convert the last stage's V̇ (the fused kernel defers it to the next call)."""

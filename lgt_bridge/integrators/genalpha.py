@@ -69,6 +69,8 @@ def _accepts(fn, keyword):
 class GenAlpha(Stepper):
 
     THETA = 0.1
+    DIVERGED_HINT = ("Reduce dt, or lower rho_inf for more numerical damping of the highest "
+                     "frequencies. The result keeps every step before it.")
 
     def __init__(self, problem, rho_inf=0.9, newton_tol=1e-10, newton_max=25):
         super().__init__(problem)

@@ -16,7 +16,7 @@ from .. import lgt as _lgt
 from ..errors import InputError
 from ..groups import quaternion as _q
 from ..groups._vec import cross
-from .base import StepFailed, first_nonfinite
+from .base import StepFailed, diverged_message, first_nonfinite, norm
 
 
 class BodySet:
@@ -196,7 +196,7 @@ class LocalProblem:
                 return c
         KX[i], KW[i], q, V = self.rhs(X, W, ts, at_start=i == 0)
         if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
-            self.stage_failed(KX[i], KW[i], t, ts, q, V)
+            self.stage_failed(KX, KW, i, t, ts, q, V, h, W0, W)
         return 0.0
 
     def flush(self, KX, KW):
@@ -218,16 +218,35 @@ class LocalProblem:
         q, quats = self.configuration(X)
         return q, self.model_velocity(W, quats)
 
-    def stage_failed(self, KX, KW, t, ts, q, V):
+    #: a stage whose velocity moved this many times farther from the step's start than
+    #: the start's own acceleration predicts (h |Ẇ_0|) is an explicit step blowing up
+    BLOWUP = 10.0
+
+    def stage_failed(self, KX, KW, i, t, ts, q, V, h, W0, W):
+        """Raise StepFailed for stage i whose state (q, V) or derivative (KX[i], KW[i]) is not
+        finite. A non-finite stage state, or a model that returned NaN/inf at a stage whose
+        velocity had already run away from the step's start (by more than BLOWUP times what
+        the start's acceleration predicts), is a diverging step; only a model that returned
+        NaN/inf at a state near the step's start is reported as the model's failure."""
         for kind, arr in (("q", q), ("V", V)):
             if not np.isfinite(arr).all():
-                raise StepFailed(f"non-finite {kind} at t = {ts:.9g} in "
-                                 f"{first_nonfinite(self.layout, kind, arr)}; the model "
-                                 "returned NaN/inf or the step diverged (try a smaller dt).")
-        where = first_nonfinite(self.layout, "V", KW) if not np.isfinite(KW).all() else "the kinematics"
+                raise StepFailed(diverged_message(
+                    t, f"the stage at t = {ts:.9g} has non-finite {kind} in "
+                       f"{first_nonfinite(self.layout, kind, arr)}", h), diverged=True)
+        bad = ~(np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all())
+        where = first_nonfinite(self.layout, "V", KW[i]) if not np.isfinite(KW[i]).all() else "the kinematics"
+        if bad and i > 0:
+            dW, pred = norm(W - W0), h * norm(KW[0])
+            if dW > self.BLOWUP * pred:
+                raise StepFailed(diverged_message(
+                    t, f"within the step the velocity ran away from |V| = {norm(W0):.3g} by {dW:.3g} "
+                       f"(the start's acceleration predicts {pred:.3g}), and at stage time {ts:.9g} "
+                       f"the acceleration of {where} overflowed to NaN/inf", h), diverged=True)
         raise StepFailed(f"non-finite acceleration of {where} in the step from t = {t:.9g} "
-                         f"(stage time {ts:.9g}): the model returned NaN/inf for a "
-                         "finite state. The result keeps every step before it.")
+                         f"(stage time {ts:.9g}): the model returned NaN/inf for a finite state "
+                         f"near the step's start (|V| = {norm(V):.3g}); check the model's f there "
+                         "(e.g. a division by zero, a singular configuration). The result keeps "
+                         "every step before it.")
 
     def to_local(self, d):
         """A vector in V's layout as X's layout (bodies: the same 6 numbers; vector part: rates)."""

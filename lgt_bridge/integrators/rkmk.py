@@ -37,6 +37,17 @@ class ExplicitRK(Stepper):
         super().set_state(q, V, W, quats, copy)
         self._fsal = False
 
+    def attempt(self, t, h):
+        """One step attempt (see the subclasses' ``_attempt``). On the numpy backend the
+        library's own arithmetic on a diverging step (overflow, inf - inf) would warn before
+        the step is reported; those floating-point warnings are silenced inside the step,
+        and non-finite values are reported as StepError naming the body (the compiled
+        kernels never warn, so the compiled path pays nothing for this)."""
+        if self.prob.compiled:
+            return self._attempt(t, h)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            return self._attempt(t, h)
+
     def stages(self, t, h):
         """All stages of one step; returns (X1, W1, q1, V1, quats) or raises _CayleyLimit."""
         prob, KX, KW, W0, A, lim = self.prob, self.KX, self.KW, self.W, self._A, self.climit
@@ -78,7 +89,7 @@ class FixedRK(ExplicitRK):
                              f"{dW:.3g}); dt = {h:.3g} is beyond this method's stability limit for the "
                              "stiffest mode. Reduce dt, or use genalpha or an adaptive method.")
 
-    def attempt(self, t, h):
+    def _attempt(self, t, h):
         try:
             X1, W1, q1, V1, quats = self.stages(t, h)
         except _CayleyLimit as lim:
@@ -87,7 +98,8 @@ class FixedRK(ExplicitRK):
                 f"{2 * np.degrees(np.arctan(lim.c)):.0f}° (|c| = {lim.c:.3g} > {CAYLEY_LIMIT}); "
                 "the chart degenerates towards a half-turn. Reduce dt, or use chart='exp' or an "
                 "adaptive method.", ChartDomainError) from None
-        # every stage was checked finite; finish() checks q1, V1 (built from X1, W1)
+        # every stage was checked finite; q1, V1 (built from X1, W1) are checked before the growth
+        self.check_finite(t + h, q1, V1)
         self._check_growth(t, h, W1)
         self.finish(t + h, q1, V1, W1, quats)
         return True, None      # fixed step: the driver goes back to dt after a shortened landing step
@@ -140,12 +152,18 @@ class AdaptiveRK(ExplicitRK):
             return 0.0
         return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * self._n)
 
-    def attempt(self, t, h):
+    def _attempt(self, t, h):
         tab = self.tab
         try:
             X1, W1, q1, V1, quats = self.stages(t, h)
         except _CayleyLimit:
             self.n_rejected += 1
+            self._facmax = 1.0
+            return False, 0.25 * h
+        except StepFailed as exc:
+            if not exc.diverged:
+                raise
+            self.n_rejected += 1              # a trial step that blew up: retry smaller
             self._facmax = 1.0
             return False, 0.25 * h
         en = self.error_norm(h, X1, W1)
