@@ -3,8 +3,11 @@
 Every combination of method x group x chart x setting (tolerance for adaptive
 methods, step for fixed-step ones) runs on the scene; each run's end state is
 compared with a tight reference (dopri5 on SE(3)/exp at rtol = atol = 1e-12,
-stated in the report). Runs execute in parallel worker processes. Output: a JSON of
-every run, a Markdown table and (with matplotlib) PNG plots. Every option is checked
+stated in the report). Runs execute in parallel worker processes (or on a Dask
+cluster) for their numbers; their wall times are then taken again one run at a time
+in this process, best of ``repeat`` (see :func:`sweep`), so that no run looks faster
+or slower because of what ran beside it. Output: a JSON of every run, a Markdown table
+and (with matplotlib) PNG plots. Every option is checked
 (:func:`check_options`) before the reference run; a run that fails (an exception in the
 run or in its worker) becomes a row with ``success = False`` and its error.
 
@@ -252,15 +255,29 @@ def _executor(workers, scheduler):
 
 
 def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None, scheduler=None, auto=True,
-          natives=True):
+          natives=True, repeat=3):
     """Run the sweep; returns (reference dict, rows). With ``auto`` every method also
     runs with group = chart = "auto"; with ``natives`` the scene's engine solvers run
     too (group "native"). ``scheduler``: see :func:`_executor`. ``progress``: bars for
-    the reference run and the sweep, as in :func:`~lgt_bridge.simulate` (None: only
-    when long, on a terminal, outside CI)."""
+    the reference run, the sweep and the timing pass, as in :func:`~lgt_bridge.simulate`
+    (None: only when long, on a terminal, outside CI).
+
+    Timing (``repeat`` ≥ 1, default 3): the runs first execute as the sweep says (in
+    parallel, for their errors and counts); then every successful run is run again alone,
+    one at a time in this process, and its ``wall_s`` is the best of ``repeat`` such
+    runs (a serial sweep, ``workers=1`` without a scheduler, counts its own pass as the
+    first of them). Each row records ``wall_repeats`` (how many lone runs its ``wall_s``
+    is the best of; 0 for a failed run, whose ``wall_s`` is the time to failure),
+    ``wall_samples_s`` and ``wall_pass_s`` (its time in the first, possibly parallel,
+    pass). ``repeat = 0`` keeps the first pass's times: with parallel workers they are
+    distorted by what ran beside them, and the report says so. ``reference["timing"]``
+    describes the method; the report states it."""
     check_options(spec, methods, groups, charts, tols, dts)
     if workers is not None and workers < 1:
         raise InputError(f"bench: workers = {workers} must be at least 1.")
+    if not (isinstance(repeat, (int, np.integer)) and repeat >= 0):
+        raise InputError(f"bench: repeat = {repeat!r} must be a whole number ≥ 0 (0: keep the first pass's "
+                         "wall times).")
     model, T = load_scene(spec)
     t0 = time.perf_counter()
     ref = simulate(model, (0.0, T), t_eval=[0.0, T], progress=progress, **REFERENCE)
@@ -273,32 +290,81 @@ def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None,
     if natives:
         jobs += [(_one_native, spec, name, s, ref.q[-1]) for name, (_, settings, _) in
                  get_scene(spec).natives.items() for s in settings]
-    rows = []
-    bar = Progress(progress, len(jobs), lambda: (len(rows), f"{sum(not r['success'] for r in rows)} failed"),
+    rows = [None] * len(jobs)
+    done = []
+    bar = Progress(progress, len(jobs), lambda: (len(done), f"{sum(not r['success'] for r in done)} failed"),
                    desc="sweep", unit=" runs", value_fmt="d")
     workers = workers or os.cpu_count() or 1
-    if workers == 1 and scheduler is None:
-        for j in jobs:
-            try:
-                rows.append(j[0](*j[1:]))
-            except Exception as exc:            # a failing run is a row of the sweep, not its end
-                rows.append(_job_failed(j, exc))
+    serial = workers == 1 and scheduler is None
+    if serial:
+        for i, j in enumerate(jobs):
+            rows[i] = _run_job(j)
+            done.append(rows[i])
             bar.step()
     else:
         submit, completed, close = _executor(workers, scheduler)
         try:
-            futs = {submit(*j): j for j in jobs}
+            futs = {submit(*j): i for i, j in enumerate(jobs)}
             for f in completed(list(futs)):
+                i = futs[f]
                 try:
-                    rows.append(f.result())
+                    rows[i] = f.result()
                 except Exception as exc:        # the worker itself failed: still a row
-                    rows.append(_job_failed(futs[f], exc))
+                    rows[i] = _job_failed(jobs[i], exc)
+                done.append(rows[i])
                 bar.step()
         finally:
             close()
     bar.close()
+    reference["timing"] = _retime(jobs, rows, repeat, serial, workers, scheduler, progress)
     rows.sort(key=lambda r: (r["method"], r["group"], r["chart"], -r["value"]))
     return reference, rows
+
+
+def _run_job(job):
+    try:
+        return job[0](*job[1:])
+    except Exception as exc:                    # a failing run is a row of the sweep, not its end
+        return _job_failed(job, exc)
+
+
+def _retime(jobs, rows, repeat, serial, workers, scheduler, progress):
+    """Set every row's ``wall_s`` to the best of ``repeat`` lone runs (see :func:`sweep`);
+    returns the timing description that goes into the report."""
+    for r in rows:
+        r["wall_pass_s"] = r["wall_s"]
+        r["wall_samples_s"] = [r["wall_s"]] if serial and r["success"] else []
+    if repeat:
+        todo = [(i, repeat - len(rows[i]["wall_samples_s"])) for i, r in enumerate(rows) if r["success"]]
+        n_done = [0]
+        bar = Progress(progress, sum(k for _, k in todo), lambda: (n_done[0], "one run at a time"),
+                       desc="timing", unit=" runs", value_fmt="d")
+        for i, k in todo:
+            for _ in range(k):
+                again = _run_job(jobs[i])
+                if again["success"]:
+                    rows[i]["wall_samples_s"].append(again["wall_s"])
+                n_done[0] += 1
+                bar.step()
+        bar.close()
+    for r in rows:
+        if repeat and r["wall_samples_s"]:
+            r["wall_s"] = min(r["wall_samples_s"])
+        r["wall_repeats"] = len(r["wall_samples_s"]) if repeat else 0
+    where = ("serially in this process" if serial else
+             f"in {workers} parallel worker processes" if scheduler is None else "on a Dask cluster")
+    if repeat:
+        how = (f"serial, best of {repeat}: the runs' errors and counts come from one pass {where}; each "
+               f"successful run's wall time is the best (minimum) of {repeat} runs made one at a time in one "
+               f"process, with nothing else of the sweep running "
+               "beside it" + (" (the pass itself was the first of them)" if serial else "") +
+               "; only the integration (simulate or the engine's solver) is timed, not building the model or "
+               "computing errors. A failed run's wall time is its time to failure, from the pass.")
+    else:
+        how = (f"first pass only (repeat = 0): one run each, {where}"
+               + ("" if serial else "; runs shared the machine with each other, so their wall times are "
+                  "distorted and not comparable with one another") + ".")
+    return dict(method="serial-best-of" if repeat else "first-pass", repeat=repeat, first_pass=where, text=how)
 
 
 def wall_at_error(rows, target, key="pose_error"):
@@ -348,6 +414,12 @@ def front_gaps(rows):
     return out
 
 
+def timing_text(reference):
+    """How the wall times of a sweep were taken, in words (for the report)."""
+    t = reference.get("timing")
+    return t["text"] if t else "not recorded (this sweep predates the timing record); treat them as rough."
+
+
 def _f(v, fmt):
     return "–" if v is None else format(v, fmt)
 
@@ -358,44 +430,53 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
     out.mkdir(parents=True, exist_ok=True)
     name = Path(spec.split(":")[0]).stem if ":" in spec else spec
     gaps = front_gaps(rows)
-    best = {k: dict(series=v[0], wall_s=v[1], exact=v[2]) for k, v in best_at(rows, target).items()}
+    best = {k: dict(series=v[0], wall_s=v[1], exact=v[2], interpolated=v[2])
+            for k, v in best_at(rows, target).items()}
     (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, reference=reference, runs=rows,
                                                             auto_front=gaps, target=target, best_at_target=best),
                                                        indent=1))
     lines = [f"# Work-precision: {spec}", "",
              f"Reference: {reference['method']} on {reference['group']}/{reference['chart']} at rtol = atol = "
              f"{reference['rtol']:g}, t = 0 … {reference['t_end']:g} ({reference['n_steps']} steps).", "",
-             "| method | group | chart | setting | pose error | velocity error | constraint | energy drift | f evals | steps | wall s |",
-             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             f"Wall times: {timing_text(reference)}", "",
+             "Every number in the table is measured; figures read off a line between two runs are marked "
+             "*interpolated* where they appear.", "",
+             "| method | group | chart | setting | pose error | velocity error | constraint | energy drift | f evals | steps | wall s | timed runs |",
+             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         if r["success"]:
             lines.append(f"| {r['method']} | {r['group']} | {r['chart']} | {r['setting']}={r['value']:g} | "
                          f"{r['pose_error']:.2e} | {_f(r['velocity_error'], '.2e')} | {r['constraint_residual']:.1e} | "
                          f"{_f(r.get('energy_drift'), '.1e')} | {_f(r['n_f'], 'd')} | {_f(r['n_steps'], 'd')} | "
-                         f"{r['wall_s']:.3f} |")
+                         f"{r['wall_s']:.3f} | {r.get('wall_repeats', '–')} |")
         else:
             lines.append(f"| {r['method']} | {r['group']} | {r['chart']} | {r['setting']}={r['value']:g} | "
                          f"failed: {r['message']} | | | | {_f(r['n_f'], 'd')} | {_f(r['n_steps'], 'd')} | "
-                         f"{r['wall_s']:.3f} |")
+                         f"{r['wall_s']:.3f} | {r.get('wall_repeats', '–')} |")
     best = best_at(rows, target)
     lines += ["", f"## Cheapest at pose error {target:g}", ""]
     for side in ("bridge", "native"):
         if side in best:
             series, w, exact = best[side]
-            lines.append(f"- {side}: {series}, {'' if exact else '≤ '}{w:.3f} s"
-                         f"{'' if exact else ' (cheapest run below the target; not bracketed)'}")
+            lines.append(f"- {side}: {series}, " + (
+                f"≈ {w:.3f} s, *interpolated* (log-log, between the two runs of the series that bracket the target)"
+                if exact else f"≤ {w:.3f} s, measured (the cheapest run below the target; no run pair "
+                              "brackets it, so nothing is interpolated)"))
         else:
             lines.append(f"- {side}: no run reached it" if side == "bridge" or get_scene(spec).natives
                          else "- native: this scene has no engine solver")
     if "bridge" in best and "native" in best:
-        lines.append(f"- native / bridge wall time: {best['native'][1] / best['bridge'][1]:.2f}")
+        interp = best["native"][2] or best["bridge"][2]
+        lines.append(f"- native / bridge wall time: {best['native'][1] / best['bridge'][1]:.2f}"
+                     + (" (*interpolated*: from the interpolated figures above)" if interp else " (measured runs)"))
     if gaps:
         chosen = sorted({tuple(x) for r in rows if "auto" in r for x in r["auto"]})
         lines += ["", "## auto against the front", "",
                   f"group = chart = \"auto\" chose {', '.join('/'.join(c) for c in chosen)}. Ratio = this run's "
                   "cost over the cheapest run at least as accurate, among the same method's other "
                   "group/chart choices (what auto decides) and among all runs (≤ 1: on that front; "
-                  "wall times carry the machine's noise, f evaluations do not).", "",
+                  "wall times carry the machine's noise, f evaluations do not). Measured: every ratio is between two "
+                  "runs of the sweep, nothing is interpolated.", "",
                   "| method | setting | pose error | wall ratio, same method | f-eval ratio, same method | "
                   "f-eval ratio, all runs |", "|---|---|---:|---:|---:|---:|"]
         for g in gaps:

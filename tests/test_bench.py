@@ -81,3 +81,96 @@ def test_bench_extremes_report(tmp_path, monkeypatch):
     data = json.loads((tmp_path / "extremes.json").read_text())
     assert [r["steps"] for r in data["long_run"]] == [200] * 4
     assert "## update accuracy" in (tmp_path / "extremes.md").read_text()
+
+
+def test_bench_wall_times_are_the_best_of_lone_runs_and_the_report_says_so(tmp_path):
+    # two identical settings in one parallel sweep: both timed alone, best of `repeat`
+    ref, rows = bench.sweep("free_body", ["rkmk4"], ["SO3xR3"], ["exp"], [], [1e-2, 1e-2], workers=2,
+                            progress=False, auto=False, repeat=2)
+    assert len(rows) == 2 and rows[0]["pose_error"] == rows[1]["pose_error"]
+    assert ref["timing"]["method"] == "serial-best-of" and ref["timing"]["repeat"] == 2
+    for r in rows:
+        assert r["wall_repeats"] == 2 and len(r["wall_samples_s"]) == 2
+        assert r["wall_s"] == min(r["wall_samples_s"]) and r["wall_pass_s"] > 0
+    text = bench.write_report(tmp_path, "free_body", ref, rows, plots=False).read_text()
+    assert "Wall times: serial, best of 2" in text and "one at a time" in text and "2 parallel worker" in text
+    assert text.count(" | 2 |\n") == 2                  # the "timed runs" column
+    # a serial sweep counts its own pass as the first lone run
+    ref, rows = bench.sweep("free_body", ["rkmk4"], ["SO3xR3"], ["exp"], [], [1e-2], workers=1,
+                            progress=False, auto=False, repeat=3)
+    (r,) = rows
+    assert r["wall_repeats"] == 3 and r["wall_samples_s"][0] == r["wall_pass_s"]
+    assert "(the pass itself was the first of them)" in ref["timing"]["text"]
+
+
+def test_bench_repeat_zero_keeps_the_pass_times_and_says_they_are_distorted(tmp_path):
+    ref, rows = bench.sweep("free_body", ["rkmk4"], ["SO3xR3"], ["exp"], [], [1e-2, 5e-3], workers=2,
+                            progress=False, auto=False, repeat=0)
+    assert all(r["wall_repeats"] == 0 and r["wall_s"] == r["wall_pass_s"] for r in rows)
+    text = bench.write_report(tmp_path, "free_body", ref, rows, plots=False).read_text()
+    assert "first pass only (repeat = 0)" in text and "distorted" in text
+
+
+@pytest.mark.parametrize("repeat", [-1, 1.5, "3"])
+def test_bench_bad_repeat_is_rejected_before_the_reference_run(monkeypatch, repeat):
+    monkeypatch.setattr(bench, "simulate", lambda *a, **k: pytest.fail("the reference run started"))
+    with pytest.raises(InputError, match="repeat"):
+        bench.sweep("free_body", ["rkmk4"], ["SO3xR3"], ["exp"], [], [1e-2], workers=1, repeat=repeat)
+
+
+def _row(method, group, chart, value, err, wall, n_f):
+    return dict(method=method, group=group, chart=chart, setting="dt", value=value, success=True, message="",
+                wall_s=wall, n_f=n_f, n_steps=n_f // 4, n_rejected=0, pose_error=err, velocity_error=err,
+                constraint_residual=0.0, wall_repeats=3)
+
+
+_REF = dict(bench.REFERENCE, n_steps=10, wall_s=1.0, t_end=0.1,
+            timing=dict(method="serial-best-of", repeat=3, text="serial, best of 3 (test)"))
+
+
+def test_bench_report_marks_interpolated_figures(tmp_path):
+    bracketed = [_row("rkmk4", "SE3", "exp", 1e-3, 1e-5, 0.1, 400), _row("rkmk4", "SE3", "exp", 5e-4, 1e-7, 0.2, 800)]
+    text = bench.write_report(tmp_path, "heavy_top", _REF, bracketed, plots=False).read_text()
+    assert "- bridge: rkmk4 SE3 exp, ≈ " in text and "*interpolated*" in text
+    data = json.loads((tmp_path / "bench_heavy_top.json").read_text())
+    assert data["best_at_target"]["bridge"]["interpolated"] is True
+    below = [_row("rkmk4", "SE3", "exp", 5e-4, 1e-7, 0.2, 800)]       # nothing to interpolate between
+    text = bench.write_report(tmp_path, "heavy_top", _REF, below, plots=False).read_text()
+    assert "≤ 0.200 s, measured" in text and "- bridge:" in text
+    assert "*interpolated*" not in text.split("## Cheapest")[1]
+
+
+def test_series_styles_are_a_pure_injective_function_of_the_sweeps_series():
+    from lgt_bridge.plots import series_styles
+    keys = [(m, g, c) for m in ("rkmk4", "dopri5", "genalpha") for g in ("SE3", "SO3xR3") for c in ("exp", "cay")]
+    keys += [(m, "auto", "auto") for m in ("rkmk4", "dopri5", "genalpha")]
+    keys += [("exudyn_ga_EP", "native", "engine"), ("exudyn_ga_RotVecLG", "native", "engine")]
+    styles = series_styles(keys)
+    assert set(styles) == set(keys) and len(set(styles.values())) == len(keys)            # injective
+    assert series_styles(list(reversed(keys)) + keys[:3]) == styles                      # pure: order, repeats
+    assert styles[("rkmk4", "SE3", "exp")][0] == styles[("rkmk4", "auto", "auto")][0]   # colour by method
+    # more methods than colours, unknown groups: still one style per series
+    many = [(f"m{i}", g, c) for i in range(30) for g, c in (("SE3", "exp"), ("G", "x"))]
+    assert len(set(series_styles(many).values())) == len(many)
+
+
+def test_every_plot_of_a_sweep_uses_the_same_style_per_series_and_legends_sit_outside(tmp_path, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from lgt_bridge import plots
+    ref, rows = bench.sweep("heavy_top", ["rkmk4", "dopri5"], ["SE3", "SO3xR3"], ["exp"], [1e-6], [1e-3, 5e-4],
+                            workers=1, progress=False, repeat=1)
+    seen, save = [], plots._save
+
+    def record(plt, fig, ax, *a):
+        lines = {ln.get_gid(): (ln.get_color(), ln.get_marker(), ln.get_linestyle()) for ln in ax.get_lines()}
+        out = save(plt, fig, ax, *a)          # draws the legend
+        fig.canvas.draw()
+        seen.append((lines, ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1))
+        return out
+
+    monkeypatch.setattr(plots, "_save", record)
+    assert len(plots.work_precision_plots(tmp_path, "heavy_top", rows)) == 3
+    styles = {"|".join(k): v for k, v in plots.series_styles({plots.series_key(r) for r in rows}).items()}
+    assert len(seen) == 3 and len(styles) == 6                       # 2 methods x (SE3, SO3xR3, auto)
+    for lines, outside in seen:
+        assert lines == styles and outside                            # same style in every plot

@@ -230,7 +230,7 @@ def test_bench_scene_with_exudyn_natives(tmp_path):
     model's coordinates) converge to the bridge's reference with the steps."""
     from lgt_bridge import bench
     ref, rows = bench.sweep("exudyn_heavy_top", ["dopri5"], ["SO3xR3"], ["exp"], [1e-7], [], workers=1,
-                            progress=False, auto=False)
+                            progress=False, auto=False, repeat=1)
     model = bench.load_scene("exudyn_heavy_top")[0]
     tight = simulate(model, (0, ref["t_end"]), t_eval=[ref["t_end"]], **bench.REFERENCE)
     ref_state = (tight.q[-1], tight.V[-1])

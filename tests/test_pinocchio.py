@@ -319,7 +319,7 @@ def test_spherical_joint_as_rotation_only_body(group, chart):
 def test_bench_scene_with_the_user_loops_as_natives():
     from lgt_bridge import bench
     _, rows = bench.sweep("pinocchio_humanoid", ["dopri5"], ["SO3xR3"], ["exp"], [1e-8], [], workers=1,
-                          progress=False, auto=False)
+                          progress=False, auto=False, repeat=1)
     nat = {(r["method"], r["value"]): r for r in rows if r["group"] == "native"}
     assert len(nat) == 9 and all(r["success"] for r in nat.values())
     e = [nat[("semi-implicit Euler + pin.integrate", dt)]["pose_error"] for dt in (1e-3, 4e-4, 1e-4)]
