@@ -124,6 +124,7 @@ class AdaptiveRK(ExplicitRK):
         self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
+        self._hcay = np.inf                    # steps below this keep Cayley stages short of a half-turn
         self.dense_capable = tableau.dense
         self._errsums = _error_sums_kernel() if problem.compiled else _error_sums
 
@@ -156,10 +157,13 @@ class AdaptiveRK(ExplicitRK):
         tab = self.tab
         try:
             X1, W1, q1, V1, quats = self.stages(t, h)
-        except _CayleyLimit:
+        except _CayleyLimit as lim:
             self.n_rejected += 1
             self._facmax = 1.0
-            return False, 0.25 * h
+            # the chart angle 2·atan|c| grows about linearly with h: retry at 80 % of the step
+            # that reaches the limit, and keep later steps below it (regrowing 20 % per step)
+            self._hcay = 0.8 * h * math.atan(CAYLEY_LIMIT) / math.atan(lim.c)
+            return False, min(self._hcay, 0.5 * h)
         except StepFailed as exc:
             if not exc.diverged:
                 raise
@@ -185,7 +189,9 @@ class AdaptiveRK(ExplicitRK):
                 other[1][0] = self.KW[i_last]
                 self._fsal = True
             self.KX, self.KW = other
-            return True, h * fac
+            h_new = min(h * fac, self._hcay)
+            self._hcay *= 1.2
+            return True, h_new
         self.n_rejected += 1
         self._facmax = 1.0
         return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.err_order))
