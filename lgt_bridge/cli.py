@@ -113,7 +113,8 @@ def _bench(a):
     if a.workers is not None and a.workers < 1:
         raise InputError(f"bench --workers = {a.workers}: must be at least 1.")
     ref, rows = bench.sweep(a.scene, methods, groups, charts, tols, dts, workers=a.workers,
-                            scheduler=a.scheduler or a.dask, auto=not a.no_auto, progress=a.progress)
+                            scheduler=a.scheduler or a.dask, auto=not a.no_auto, progress=a.progress,
+                            repeat=a.repeat)
     path = bench.write_report(a.out, a.scene, ref, rows, plots=not a.no_plots)
     print(path.read_text())
     return 0
@@ -204,6 +205,9 @@ def _parser():
     b.add_argument("--dask", choices=["local"], default=None, help="'local': start a Dask LocalCluster")
     b.add_argument("--no-auto", action="store_true", help="leave out the group=chart='auto' runs")
     b.add_argument("--no-plots", action="store_true", help="Markdown and JSON only")
+    b.add_argument("--repeat", type=int, default=3,
+                   help="wall time of each run = best of this many lone runs, one at a time after the "
+                        "(parallel) pass (default 3); 0 keeps the pass's times, which parallel workers distort")
     b.add_argument("--long-steps", type=int, default=1_000_000,
                    help="extremes: steps of the long run per method (default 10⁶)")
     b.add_argument("--progress", **progress)

@@ -256,3 +256,17 @@ def test_bench_progress_forced_shows_the_reference_run(tmp_path):
     q = _cli("bench", f"{scene}:make", "--methods", "rkmk4", "--groups", "SE3", "--charts", "exp", "--dts", "0.01",
              "--no-auto", "--no-plots", "--workers", "1", "--out", str(tmp_path / "o"))
     assert q.returncode == 0 and "%|" not in q.stderr
+
+
+def test_bench_repeat_option_reaches_the_report(tmp_path, capsys):
+    """--repeat sets how many lone runs each wall time is the best of; a bad value is a
+    one-line error before the reference run."""
+    assert cli.main(["bench", "free_body", "--methods", "rkmk4", "--groups", "SO3xR3", "--charts", "exp",
+                     "--dts", "1e-2", "--workers", "1", "--no-auto", "--no-plots", "--repeat", "1",
+                     "--out", str(tmp_path)]) == 0
+    rows = json.loads((tmp_path / "bench_free_body.json").read_text())["runs"]
+    assert rows and all(r["wall_repeats"] == 1 for r in rows if r["group"] != "native")
+    capsys.readouterr()
+    assert cli.main(["bench", "free_body", "--repeat", "-1", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lgt-bridge: error:") and "repeat" in err
