@@ -122,6 +122,22 @@ class RigidBodySystem(Model):
         return out.reshape(B.shape)
 
     def forces(self, q, V, t):
+        """Q(q, V, t) of M V̇ = Q - Aᵀλ (torque body, force inertial per body); a new array."""
+        if not self.compiled:
+            return self._forces_numpy(q, V, t)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        load = self._knoload
+        if self.load is not None:
+            F, T = self.load(t, q, V)
+            load = self._kload
+            load[:, :3] = T
+            load[:, 3:] = F
+        out = np.empty(6 * self.nb)
+        (_KS or _kernels()).forces(self._kI, self._kF, q, V, load, out)
+        return out
+
+    def _forces_numpy(self, q, V, t):
         r, R = self._poses(q)
         W = V.reshape(self.nb, 6)
         w = W[:, :3]
@@ -257,7 +273,7 @@ class RigidBodySystem(Model):
         return out
 
     def _f_numpy(self, q, V, t):
-        Q = self.forces(q, V, t)
+        Q = self._forces_numpy(q, V, t)
         if not self.n_constraints:
             return self.solve_mass(q, Q)
         A = self.constraint_jacobian(q)

@@ -129,6 +129,8 @@ def test_compiled_scene_equals_numpy(monkeypatch, rng, name, param):
         got = comp.f(q, V, t)
         assert close(got, want), (np.abs(got - want).max(), np.abs(want).max())
         assert close(comp._f_numpy(q, V, t), want)
+        Qw = ref.forces(q, V, t)
+        assert close(comp.forces(q, V, t), Qw), np.abs(comp.forces(q, V, t) - Qw).max()
         if ref.n_constraints:
             assert close(comp.constraints(q), ref.constraints(q))
             assert close(comp.constraint_jacobian(q), ref.constraint_jacobian(q))

@@ -348,6 +348,37 @@ def f(I, F, q, V, load, out):
 
 
 @njit(cache=True)
+def forces(I, F, q, V, load, out):
+    """out = Q + load: -ω × Jω and gravity (a pivoted body: the gravity moment, no force),
+    the springs' forces and torques, and ``load`` (nb, 6) when it has rows (the generalized
+    forces of M V̇ = Q - Aᵀλ, for generalized-α's residual)."""
+    nb, nu = I[NB], 3 + I[NROT]
+    pivot = I[I[I_PIVOT]:I[I_RB]]
+    g0, g1, g2, bf = F[I[F_G]], F[I[F_G] + 1], F[I[F_G] + 2], F[I[F_BODY]:I[F_SP]]
+    R = _rotations(I, F, q)
+    for b in range(nb):
+        v, o = 6 * b, NBF * b
+        w0, w1, w2 = V[v], V[v + 1], V[v + 2]
+        j = o + J
+        Jw0 = bf[j] * w0 + bf[j + 1] * w1 + bf[j + 2] * w2
+        Jw1 = bf[j + 3] * w0 + bf[j + 4] * w1 + bf[j + 5] * w2
+        Jw2 = bf[j + 6] * w0 + bf[j + 7] * w1 + bf[j + 8] * w2
+        t0, t1, t2 = cross(w0, w1, w2, Jw0, Jw1, Jw2)
+        m = bf[o + MASS]
+        if pivot[b]:
+            c0, c1, c2 = _pivot_moment(bf, R, b, m, g0, g1, g2)
+            out[v], out[v + 1], out[v + 2] = -t0 + c0, -t1 + c1, -t2 + c2
+            out[v + 3], out[v + 4], out[v + 5] = 0.0, 0.0, 0.0
+        else:
+            out[v], out[v + 1], out[v + 2] = -t0, -t1, -t2
+            out[v + 3], out[v + 4], out[v + 5] = m * g0, m * g1, m * g2
+    _springs(nu, q, V, R, I[I[I_SP]:I[I_JT]], F[I[F_SP]:I[F_JT]], out)
+    for b in range(load.shape[0]):
+        for c in range(6):
+            out[6 * b + c] += load[b, c]
+
+
+@njit(cache=True)
 def constraints(I, F, q, out):
     """out = g(q) = p_i - p_j of every joint (p_j a ground point for j = -1)."""
     R = _rotations(I, F, q)
