@@ -57,7 +57,12 @@ class RigidBodySystem(Model):
         self.layout = Layout.stacked([self.param] * nb, names=names)
         self.m = np.asarray(masses, float)
         self.J = np.asarray(inertias, float).reshape(nb, 3, 3)
-        self.Jinv = np.linalg.inv(self.J)
+        try:
+            self.Jinv = np.linalg.inv(self.J)
+        except np.linalg.LinAlgError:
+            k = next((i for i in range(nb) if np.linalg.det(self.J[i]) == 0.0), 0)
+            raise InputError(f"body {k}: its inertia matrix {self.J[k].tolist()} is singular; give "
+                             "positive principal moments of inertia.") from None
         self.g = np.asarray(gravity, float)
         self.pivot = np.zeros(nb, bool)
         self.c = np.zeros((nb, 3))
@@ -125,16 +130,8 @@ class RigidBodySystem(Model):
         """Q(q, V, t) of M V̇ = Q - Aᵀλ (torque body, force inertial per body); a new array."""
         if not self.compiled:
             return self._forces_numpy(q, V, t)
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        V = np.ascontiguousarray(V, dtype=np.float64)
-        load = self._knoload
-        if self.load is not None:
-            F, T = self.load(t, q, V)
-            load = self._kload
-            load[:, :3] = T
-            load[:, 3:] = F
         out = np.empty(6 * self.nb)
-        (_KS or _kernels()).forces(self._kI, self._kF, q, V, load, out)
+        (_KS or _kernels()).forces(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
         return out
 
     def _forces_numpy(self, q, V, t):
@@ -260,17 +257,22 @@ class RigidBodySystem(Model):
         """V̇ (index 1): M⁻¹(Q - Aᵀλ) with A M⁻¹Aᵀ λ = A M⁻¹Q + γ; a new array."""
         if not self.compiled:
             return self._f_numpy(q, V, t)
+        out = np.empty(6 * self.nb)
+        (_KS or _kernels()).f(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
+        return out
+
+    def _kernel_inputs(self, q, V, t):
+        """(q, V, load) for the kernels: float64 arrays and the user load as (nb, 6) rows
+        (torque body, force inertial), or no rows without a load."""
         q = np.ascontiguousarray(q, dtype=np.float64)
         V = np.ascontiguousarray(V, dtype=np.float64)
-        load = self._knoload
-        if self.load is not None:
-            F, T = self.load(t, q, V)
-            load = self._kload
-            load[:, :3] = T
-            load[:, 3:] = F
-        out = np.empty(6 * self.nb)
-        (_KS or _kernels()).f(self._kI, self._kF, q, V, load, out)
-        return out
+        if self.load is None:
+            return q, V, self._knoload
+        F, T = self.load(t, q, V)
+        load = self._kload
+        load[:, :3] = T
+        load[:, 3:] = F
+        return q, V, load
 
     def _f_numpy(self, q, V, t):
         Q = self._forces_numpy(q, V, t)

@@ -228,3 +228,20 @@ def test_exudyn_massless_node_is_named():
     mbs.Assemble()
     with pytest.raises(InputError, match=r"mass matrix at q0 is singular: the motion of V\[3\]"):
         simulate(ExudynModel(mbs), (0, 1), method="dopri5")
+
+
+def test_singular_inertia_is_an_input_error_naming_the_body():
+    """numpy's LinAlgError from inverting the inertias used to reach the user."""
+    q0 = np.array([0, 0, 0, 1.0, 0, 0, 0] * 2)
+    with pytest.raises(InputError, match=r"body 1: its inertia matrix .* is singular"):
+        scenes.RigidBodySystem([1.0, 1.0], [np.eye(3), np.zeros((3, 3))], q0, np.zeros(12))
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_pinocchio_f_with_a_wrong_size_twist_is_an_input_error(backend):
+    pin = pytest.importorskip("pinocchio")
+    from lgt_pinocchio import PinocchioModel
+    for model in (pin.buildSampleModelHumanoidRandom(), pin.buildSampleModelManipulator()):  # root / fixed base
+        pm = PinocchioModel(model, backend=backend)
+        with pytest.raises(InputError, match="V of shape"):
+            pm.f(pm.q0, np.zeros(3), 0.0)

@@ -12,6 +12,7 @@ from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_pinocchio import PinocchioModel  # noqa: E402
 
 import references as ref  # noqa: E402
+from pinocchio_models import ball_chain  # noqa: E402
 
 J = np.array([1.0, 2.0, 3.0])
 W0 = np.array([0.01, 2.0, 0.01])                   # near the middle axis: the Dzhanibekov flip
@@ -262,17 +263,6 @@ def test_fixed_base_and_several_free_flyers():
     assert r2.success and len(pm2.layout.bodies) == 2 and np.abs(h - h[0]).max() < 1e-8
 
 
-def _ball_chain():
-    m = pin.Model()
-    r = m.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
-    m.appendBodyToJoint(r, pin.Inertia(2.0, np.array([0, 0, 0.1]), np.diag([1.0, 1.5, 2.0])), pin.SE3.Identity())
-    b = m.addJoint(r, pin.JointModelSpherical(), pin.SE3(np.eye(3), np.array([0.3, 0, 0])), "ball")
-    m.appendBodyToJoint(b, pin.Inertia(0.5, np.array([0.2, 0, 0]), np.diag([0.1, 0.2, 0.25])), pin.SE3.Identity())
-    c = m.addJoint(b, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.4, 0, 0])), "hinge")
-    m.appendBodyToJoint(c, pin.Inertia(0.3, np.array([0.15, 0, 0]), np.diag([0.02, 0.05, 0.05])), pin.SE3.Identity())
-    return m
-
-
 def _plain_reference(model, q0, v0, T):
     """Renormalized DOP853 on Pinocchio's (q, v): q̇ = (R v_lin, ½ p⊗(0, ω)) for the root,
     ½ p⊗(0, ω) for the ball (x y z w order), v for the hinge; no lgt_bridge code."""
@@ -300,7 +290,7 @@ def _plain_reference(model, q0, v0, T):
 
 @pytest.mark.parametrize("group,chart", [("SE3", "exp"), ("SO3xR3", "cay")])
 def test_spherical_joint_as_rotation_only_body(group, chart):
-    model = _ball_chain()
+    model = ball_chain()
     rng = np.random.default_rng(1)
     q0 = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
     v0 = rng.normal(size=model.nv)

@@ -4,9 +4,6 @@ body, several free-flyers, the sample humanoid, spherical joints (rotation-only 
 with and without a free-flyer root), a fixed-base arm and constrained models; tau as a
 vector and as a callable, fext; inputs of other types; whole simulate() runs on both
 backends. Skipped only when pin is not installed."""
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,12 +13,8 @@ pin = pytest.importorskip("pinocchio")
 from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_pinocchio import PinocchioModel  # noqa: E402
 
-
-def close(a, b, tol=1e-13):
-    """|a - b| ≤ tol relative to the magnitude of the quantity b."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape
-    return a.size == 0 or np.abs(a - b).max() <= tol * max(np.abs(b).max(), 1e-300)
+from backend_checks import close, run_python  # noqa: E402
+from pinocchio_models import ball_chain  # noqa: E402
 
 
 def free_body():
@@ -42,18 +35,6 @@ def two_free_flyers():
 def humanoid():
     pin.seed(11)
     return pin.buildSampleModelHumanoidRandom()
-
-
-def ball_chain():
-    """Free-flyer root, a spherical joint (rotation-only body) and a hinge."""
-    m = pin.Model()
-    r = m.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
-    m.appendBodyToJoint(r, pin.Inertia(2.0, np.array([0, 0, 0.1]), np.diag([1.0, 1.5, 2.0])), pin.SE3.Identity())
-    b = m.addJoint(r, pin.JointModelSpherical(), pin.SE3(np.eye(3), np.array([0.3, 0, 0])), "ball")
-    m.appendBodyToJoint(b, pin.Inertia(0.5, np.array([0.2, 0, 0]), np.diag([0.1, 0.2, 0.25])), pin.SE3.Identity())
-    c = m.addJoint(b, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.4, 0, 0])), "hinge")
-    m.appendBodyToJoint(c, pin.Inertia(0.3, np.array([0.15, 0, 0]), np.diag([0.02, 0.05, 0.05])), pin.SE3.Identity())
-    return m
 
 
 def ball_pendulum():
@@ -219,15 +200,8 @@ def test_simulate_agrees_across_backends(monkeypatch, rng, name, method, kw):
     assert close(out[1].q, out[0].q, 1e-12) and close(out[1].V, out[0].V, 1e-12)
 
 
-def _run_python(code, **env):
-    e = dict(os.environ, **env)
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e, timeout=300)
-    assert r.returncode == 0, r.stderr
-    return r.stdout
-
-
 def test_numpy_backend_never_imports_numba():
-    out = _run_python("import sys, numpy as np, pinocchio as pin\n"
+    out = run_python("import sys, numpy as np, pinocchio as pin\n"
                       "from lgt_pinocchio import PinocchioModel\n"
                       "m = pin.buildSampleModelHumanoidRandom()\n"
                       "pm = PinocchioModel(m); pm.f(pm.q0, pm.V0 + 0.1, 0.0)\n"
@@ -237,7 +211,7 @@ def test_numpy_backend_never_imports_numba():
 
 def test_kernels_run_interpreted():
     """NUMBA_DISABLE_JIT=1: the same kernel source runs as plain Python and agrees."""
-    out = _run_python("import numpy as np, pinocchio as pin\n"
+    out = run_python("import numpy as np, pinocchio as pin\n"
                       "from lgt_pinocchio import PinocchioModel\n"
                       "rng, worst = np.random.default_rng(5), 0.0\n"
                       "pin.seed(2); m = pin.buildSampleModelHumanoidRandom()\n"

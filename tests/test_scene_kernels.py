@@ -2,9 +2,8 @@
 numpy reference methods of RigidBodySystem: f, the joints' g, A and γ on random states
 for every scene and parameterization, springs, pivots and loads; whole runs of the chain
 on both backends; numba stays unimported on the numpy backend."""
+
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -12,14 +11,9 @@ import pytest
 from lgt_bridge import scenes
 from lgt_bridge.simulate import simulate
 
+from backend_checks import close, run_python
+
 PARAMS = ["quat", "quat_xyzw", "rotvec", "rxyz"]
-
-
-def close(a, b, tol=1e-13):
-    """|a - b| ≤ tol relative to the magnitude of the quantity b."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape
-    return a.size == 0 or np.abs(a - b).max() <= tol * max(np.abs(b).max(), 1e-300)
 
 
 def full_inertia(rng):
@@ -206,15 +200,8 @@ def test_chain_runs_agree_across_backends(monkeypatch, method, kw, param):
     assert close(out[1].q, out[0].q, 1e-12) and close(out[1].V, out[0].V, 1e-12)
 
 
-def _run_python(code, **env):
-    e = dict(os.environ, **env)
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e, timeout=300)
-    assert r.returncode == 0, r.stderr
-    return r.stdout
-
-
 def test_numpy_backend_never_imports_numba():
-    out = _run_python("import sys, lgt_bridge\n"
+    out = run_python("import sys, lgt_bridge\n"
                       "from lgt_bridge import scenes\n"
                       "m = scenes.chain(3); m.f(m.q0, m.V0, 0.0); m.constraint_jacobian(m.q0)\n"
                       "print('numba' in sys.modules)", LGT_BRIDGE_BACKEND="numpy")
@@ -223,7 +210,7 @@ def test_numpy_backend_never_imports_numba():
 
 def test_kernels_run_interpreted():
     """NUMBA_DISABLE_JIT=1: the same source runs as plain Python and agrees, every scene."""
-    out = _run_python("import os, sys, numpy as np\n"
+    out = run_python("import os, sys, numpy as np\n"
                       f"sys.path.insert(0, {os.path.dirname(__file__)!r})\n"
                       "import test_scene_kernels as T\n"
                       "class Env:\n"

@@ -304,11 +304,6 @@ class ExudynModel(Model):
         return out
 
     def _AV_at(self, q, V):
-        """A(q) V = C_q(q) q̇_e(q, V); C_q is position-level, so only q is written."""
-        self.sd.SetODE2Coordinates(q - self.ref)
-        return self._Cq() @ self.rates_from_twist(q, V)
-
-    def _AV_at(self, q, V):
         """A(q) V from Exudyn's velocity-level constraint residual C_q(q) q̇_e (a vector:
         no dense Jacobian transfer)."""
         self._write(q, self.rates_from_twist(q, V), self.sd.GetTime())

@@ -388,6 +388,7 @@ class PinocchioModel(Model):
         tau_call = callable(tau_c)
         nv_shape = (self.nv,)
         checked_tau, forces = self._checked_tau, self._forces
+        check_sizes = self._check_sizes
         ndarray, F64, contiguous = np.ndarray, _F64, np.ascontiguousarray
         if self.n_constraints:
             cms, cds, prox = self.cms, self.cds, self.prox
@@ -408,8 +409,9 @@ class PinocchioModel(Model):
             if has_roots:
                 try:
                     v_from_twist(q, V, W)
-                except TypeError:                      # not float64 C-contiguous arrays
+                except (TypeError, ValueError):        # not float64 C-contiguous, or the wrong size
                     q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
+                    check_sizes(q, V)
                     v_from_twist(q, V, W)
                 v = v_buf
             else:
@@ -417,6 +419,8 @@ class PinocchioModel(Model):
                     q = contiguous(q, dtype=F64)
                 if type(V) is not ndarray or V.dtype is not F64:
                     V = contiguous(V, dtype=F64)
+                if V.shape != nv_shape:
+                    check_sizes(q, V)
                 v = V                                  # the same in both coordinates
             tau = tau_c
             if tau_call:
@@ -437,7 +441,14 @@ class PinocchioModel(Model):
             raise InputError(f"tau(t, q, v) returned shape {tau.shape}; expected ({self.nv},).")
         return tau
 
+    def _check_sizes(self, q, V):
+        if np.shape(q) != (self.model.nq,) or np.shape(V) != (self.nv,):
+            raise InputError(f"PinocchioModel.f: q has shape {np.shape(q)} and V {np.shape(V)}; this model needs "
+                             f"q of shape ({self.model.nq},) and V of shape ({self.nv},) (the twist layout of "
+                             "model.layout).")
+
     def _f_numpy(self, q, V, t):
+        self._check_sizes(q, V)
         pin = self.pin
         v = self._v_from_twist_numpy(q, V)
         tau = self._torques(t, q, v)

@@ -226,7 +226,7 @@ class DenseStep:
         self._F = None
 
     def _coefficients(self):
-        tab, prob, st = self.st.tab, self.st.prob, self.st
+        tab, prob = self.st.tab, self.st.prob
         h, KX, KW = self.h, self.KX, self.KW
         if tab.P is not None:
             P = tab.P
