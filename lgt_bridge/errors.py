@@ -21,3 +21,9 @@ class ChartDomainError(LGTError, ValueError):
 
 class StepError(LGTError, RuntimeError):
     """An integration step failed (non-finite state, Newton divergence)."""
+
+
+class ModelNote(UserWarning):
+    """Something lgt_bridge noticed about a model and handled, which the user should
+    know: redundant constraint equations it set aside, an inconsistent initial state it
+    moved onto the constraints."""

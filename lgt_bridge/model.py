@@ -13,6 +13,12 @@ M(q) and forces Q(q, V, t) in the same velocity coordinates (M V̇ + Aᵀλ = Q)
 constraint residual g(q), its Jacobian A(q) with respect to V (ġ = A V) and the
 acceleration term γ(q, V) = (d/dt A) V. These feed the projection after
 explicit steps and the Newton iteration of generalized-α.
+
+Constraints may depend on time, g(q, t) = 0 with A V = b(q, t) = -∂g/∂t
+(``time_dependent_constraints``, ``constraints_at`` and ``velocity_rhs``), and some
+rows may hold on velocities only (``velocity_rows``: nonholonomic rows A(q) V = b,
+rolling without slipping); their entries of g are not position residuals and are
+ignored by position projection and by generalized-α's position rows.
 """
 from dataclasses import dataclass, field
 
@@ -117,6 +123,10 @@ class Model:
     q0: np.ndarray
     V0: np.ndarray
     n_constraints = 0
+    #: indices of the constraint rows that hold on velocities only (A(q) V = b(q, t))
+    velocity_rows = ()
+    #: True when g, b or γ depend on t (prescribed motion, moving supports)
+    time_dependent_constraints = False
 
     def f(self, q, V, t):
         M = self.mass_matrix(q)
@@ -142,6 +152,20 @@ class Model:
     def constraint_gamma(self, q, V):
         return np.zeros(0)
 
+    def constraints_at(self, q, t):
+        """g(q, t): ``constraints(q)`` unless the model's constraints depend on time."""
+        return self.constraints(q)
+
+    def velocity_rhs(self, q, t):
+        """b(q, t) in A(q) V = b (-∂g/∂t for position rows); None when it is zero."""
+        return None
+
+    @property
+    def position_rows(self):
+        """Indices of the constraint rows that hold on positions (g(q, t) = 0)."""
+        vel = set(int(i) for i in self.velocity_rows)
+        return np.array([i for i in range(self.n_constraints) if i not in vel], int)
+
     def write_back(self, q, V, t):
         """Put the state into the engine (sensors, viewers); nothing for pure-numpy models."""
 
@@ -153,14 +177,39 @@ class Model:
 
 
 def solve_kkt(M, A, rhs_v, rhs_c):
-    """[M Aᵀ; A 0] [x; λ] = [rhs_v; rhs_c] by the range-space method (M SPD)."""
+    """[M Aᵀ; A 0] [x; λ] = [rhs_v; rhs_c] by the range-space method (M SPD). A
+    rank-deficient A (redundant constraints) gives the minimum-norm λ and the unique x."""
     L = np.linalg.cholesky(M)
     def Minv(B):
         return np.linalg.solve(L.T, np.linalg.solve(L, B))
     MiAt = Minv(A.T)
     Miv = Minv(rhs_v)
-    lam = np.linalg.solve(A @ MiAt, A @ Miv - rhs_c)
+    lam = solve_schur(A @ MiAt, A @ Miv - rhs_c)
     return Miv - MiAt @ lam, lam
+
+
+#: eigenvalues of A M⁻¹ Aᵀ below this fraction of the largest count as zero
+SCHUR_RCOND = 1e-11
+
+
+def solve_schur(S, r):
+    """S x = r for the symmetric positive semi-definite Schur complement S = A M⁻¹ Aᵀ:
+    Cholesky when S is well conditioned, else the minimum-norm least-squares solution
+    (redundant constraints make S singular; a consistent r still has solutions, and
+    M⁻¹Aᵀx, the constraint force, is the same for all of them)."""
+    if len(r) == 0:
+        return np.zeros(np.shape(r))
+    try:
+        L = np.linalg.cholesky(S)
+        d = np.diagonal(L)
+        if d.min() > np.sqrt(SCHUR_RCOND) * d.max():
+            return np.linalg.solve(L.T, np.linalg.solve(L, r))
+    except np.linalg.LinAlgError:
+        pass
+    w, U = np.linalg.eigh(0.5 * (S + S.T))
+    keep = w > SCHUR_RCOND * max(w.max(), 0.0)
+    Ur = U[:, keep]
+    return Ur @ ((Ur.T @ r) / (w[keep] if r.ndim == 1 else w[keep][:, None]))
 
 
 def _solve_mass_dense(model, q, B):

@@ -8,7 +8,7 @@ from . import auto as _auto
 from .errors import ChartDomainError, InputError, StepError
 from .integrators import METHODS
 from .integrators.base import StepFailed
-from .integrators.constraints import Projector
+from .integrators.constraints import Projector, project_initial
 from .integrators.local import make_problem
 from .integrators.rkmk import AdaptiveRK, FixedRK
 from .integrators.tableaux import ADAPTIVE, FIXED
@@ -59,9 +59,10 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
         raise InputError(f"dt = {dt} must be a positive finite step size.")
     if dt is None and (method in FIXED or method == "genalpha"):
         raise InputError(f"method {method!r} takes fixed steps: pass dt (e.g. dt=1e-3).")
-    for name, v in (("rtol", rtol), ("atol", atol)):
-        if not (np.isfinite(v) and v > 0):
-            raise InputError(f"{name} = {v} must be positive.")
+    if not (np.isfinite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
+        raise InputError(f"rtol = {rtol} must be zero or positive.")
+    if not (np.isfinite(atol) and atol > 0):
+        raise InputError(f"atol = {atol} must be positive.")
     if not int(max_steps) > 0:
         raise InputError(f"max_steps = {max_steps} must be a positive integer.")
     lay = model.layout
@@ -236,14 +237,24 @@ class Driver:
     """Advances a stepper to target times. Fixed steps of dt land on each target (the
     last step shortened); adaptive methods with a continuous extension step freely up
     to ``t_end`` and interpolate every target inside their last step (dense output:
-    output times never shorten steps). Counts steps; raises StepFailed."""
+    output times never shorten steps). Counts steps; raises StepFailed.
 
-    def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None):
+    ``consistent``: a constrained model's initial state is first moved onto its
+    constraints when it violates them (:func:`.integrators.constraints.project_initial`);
+    ``initial_projection`` says how far (None: it was consistent)."""
+
+    def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None,
+                 consistent=True):
         self.model, self.stepper = model, stepper
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
         self.t_end = t_end
         self.dense = bool(getattr(stepper, "dense_capable", False)) and t_end is not None
         self.n_steps = 0
+        self.initial_projection = None
+        if consistent and model.n_constraints:
+            q0, V0, self.initial_projection = project_initial(model, q0, V0, self.t)
+            if self.initial_projection is not None:
+                model.write_back(q0, V0, self.t)
         stepper.set_state(q0, V0)
         self.h = dt if dt is not None else stepper.initial_step(self.t)
 
@@ -263,7 +274,7 @@ class Driver:
             if st.adaptive:
                 self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
             else:
-                self.h = h_new if h_new is not None else self.dt
+                self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:
                 on_step(self.t, st.q, st.V)
         else:
@@ -299,8 +310,10 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     per body). "auto" picks per body what the model's structure needs
     (:mod:`lgt_bridge.auto`); ``stats["auto"]`` says what it chose and why, and
     ``result.group``/``result.chart`` hold the resolved per-body lists.
-    Constrained models with explicit methods are projected onto g = 0 and A V = 0
-    after every step (``project=False`` turns this off).
+    Constrained models with explicit methods are projected onto g = 0 and A V = b
+    after every step, and an initial state that violates the constraints is projected
+    before the first step (``stats["initial_projection"]`` says how far it moved);
+    ``project=False`` turns both off.
     t_eval: output times; default: every step. Fixed-step methods land on them;
     dopri5 and dop853 interpolate them with their continuous extension (through τ),
     so output times never shorten their steps.
@@ -320,7 +333,8 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=(t0, t1))
     wall0 = time.perf_counter()
-    drv = Driver(model, stepper, dt, t0, q0, V0, max_steps, t_end=t1)
+    drv = Driver(model, stepper, dt, t0, q0, V0, max_steps, t_end=t1, consistent=project)
+    q0, V0 = drv.stepper.q, drv.stepper.V
     ts, qs, Vs = [], [], []
     record_all = t_eval is None
     targets = [t1] if record_all else [t for t in t_eval if t > t0]
@@ -353,6 +367,8 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
         model.write_back(stepper.q, stepper.V, drv.t)
     bar.close()
     res = _result(ts, qs, Vs, success, message, stepper, drv.n_steps, wall0, method, group, chart, model)
+    if drv.initial_projection is not None:
+        res.stats["initial_projection"] = drv.initial_projection
     if choice is not None:
         res.stats["auto"] = choice.as_dicts()
     return res
@@ -368,7 +384,9 @@ def _result(ts, qs, Vs, success, message, stepper, n_steps, wall0, method, group
                      velocity_constraint_after_projection=projector.max_vel_after,
                      projection_iterations=projector.iterations)
     elif model.n_constraints and qs:
-        stats["constraint_residual"] = float(max(np.abs(model.constraints(q)).max() for q in qs))
+        rows = model.position_rows
+        stats["constraint_residual"] = float(max(
+            (np.abs(model.constraints_at(q, t)[rows]).max() if len(rows) else 0.0) for t, q in zip(ts, qs)))
     if hasattr(stepper, "n_jacobians"):
         stats["n_jacobians"] = stepper.n_jacobians
     nq, nv = model.layout.nq, model.layout.nv

@@ -23,8 +23,8 @@ from lgt_bridge.model import Layout, Model, RigidBody, solve_kkt
 RIGID = {"RigidBodyEP": params.QUAT_WXYZ, "RigidBodyRotVecLG": params.ROTVEC,
          "RigidBodyRxyz": params.RXYZ}
 #: node types whose ODE2 coordinates are a vector space (q̇ = v)
-VECTOR = ("Point", "Point2D", "RigidBody2D", "GenericODE2", "Point3DSlope1", "Point3DSlope23",
-          "Point2DSlope1", "PointGround")
+VECTOR = ("Point", "Point2D", "RigidBody2D", "GenericODE2", "1D", "PointSlope1", "PointSlope12",
+          "PointSlope23", "Point2DSlope1", "Point3DSlope1", "Point3DSlope23")
 _EPS_GAMMA = 1e-5
 
 
@@ -45,11 +45,17 @@ class ExudynModel(Model):
         sd = self.sd = mbs.systemData
         self.n2, n1, self.nae = sd.ODE2Size(), sd.ODE1Size(), sd.AEsize()
         if n1:
-            raise InputError(f"Exudyn system has {n1} ODE1 coordinates (first-order objects); "
-                             "lgt_bridge integrates second-order (ODE2) systems only.")
+            raise InputError(
+                f"Exudyn system has {n1} ODE1 coordinates (first-order states) in "
+                f"{_items_with(mbs, sd.GetObjectLTGODE1)}: lgt_bridge integrates second-order (ODE2) "
+                "systems only and cannot integrate first-order states alongside yet. Run this model "
+                "with Exudyn's own exu.SolveDynamic (e.g. the default generalized-alpha solver).")
         if sd.DataSize():
-            raise InputError(f"Exudyn system has {sd.DataSize()} data coordinates (contact or friction "
-                             "states); these need Exudyn's discontinuous iteration and are not supported.")
+            raise InputError(
+                f"Exudyn system has {sd.DataSize()} data coordinates (contact or friction states) in "
+                f"{_items_with(mbs, sd.GetObjectLTGData)}: they switch between steps in Exudyn's "
+                "discontinuous iteration, which lgt_bridge does not run. Run this model with Exudyn's "
+                "own exu.SolveDynamic.")
         bodies, vq, ep_ae = [], [], []
         self.kinds = []
         iv = 0
@@ -57,7 +63,10 @@ class ExudynModel(Model):
         for i in range(sd.NumberOfNodes()):
             node = mbs.GetNode(i)
             typ = node["nodeType"]
-            idx = list(sd.GetNodeLTGODE2(i))
+            try:
+                idx = list(sd.GetNodeLTGODE2(i))
+            except Exception:                           # nodes without ODE2 coordinates
+                idx = []
             if typ in RIGID:
                 par = RIGID[typ]
                 bodies.append(RigidBody(par, tuple(idx[:3]), tuple(idx[3:]), tuple(range(iv, iv + 6)),
@@ -66,7 +75,9 @@ class ExudynModel(Model):
                 iv += 6
                 if typ == "RigidBodyEP":
                     ep_ae += list(sd.GetNodeLTGAE(i))
-            elif typ in VECTOR or typ.startswith("Point") or typ.startswith("Generic"):
+            elif typ == "PointGround" or not len(idx):
+                continue                                       # no ODE2 coordinates
+            elif typ in VECTOR:
                 for k in idx:
                     vq.append(k)
                     self.vidx_of_q[k] = iv
@@ -74,7 +85,8 @@ class ExudynModel(Model):
             else:
                 raise InputError(f"Exudyn node {i} ({node.get('name', '')!r}) has type {typ!r}, which "
                                  f"lgt_bridge does not support; supported rigid nodes: {sorted(RIGID)}, "
-                                 f"vector-space nodes: {list(VECTOR)}.")
+                                 f"vector-space nodes: {list(VECTOR)}. Run this model with Exudyn's own "
+                                 "exu.SolveDynamic, or build it from supported nodes.")
         self.layout = Layout(self.n2, iv, bodies, tuple(vq), tuple(self.vidx_of_q[vq]))
         self.nv = iv
         self.ae_keep = np.array(sorted(set(range(self.nae)) - set(ep_ae)), int)
@@ -86,9 +98,12 @@ class ExudynModel(Model):
         self.solver = exu.MainSolverImplicitSecondOrder()
         self._init_solver()
         self.ref = np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
-        self._jac_zero = np.zeros((self.solver.GetODE2size() + self.nae, self.solver.GetODE2size() + self.nae))
+        self._ae0 = self.solver.GetODE2size() + self.solver.GetODE1size()    # first AE row
+        self._jac_zero = np.zeros((self._ae0 + self.nae, self._ae0 + self.nae))
         self.q0 = np.array(sd.GetODE2Coordinates()) + self.ref
         self.V0 = self.twist_from_rates(self.q0, np.array(sd.GetODE2Coordinates_t()))
+        self.t0 = float(sd.GetTime())
+        self._classify_constraints()
         for k, b in enumerate(bodies):
             if self.kinds[k][0] == "RigidBodyEP":
                 self._check_euler_parameters(b)
@@ -255,12 +270,133 @@ class ExudynModel(Model):
         sd.SetODE2Coordinates_t(qd)
         sd.SetTime(t)
 
-    def _Cq(self):
+    def _ae_jacobian(self, c_pos=1.0, c_vel=1.0):
+        """Exudyn's AE Jacobian at the written state: c_pos ∂C/∂q + c_vel ∂C/∂q̇ (all AE
+        rows, n2 columns) and the AE-AE diagonal (1 on rows Exudyn keeps as λ = 0)."""
         S = self.solver
         S.SetSystemJacobian(self._jac_zero)
-        S.ComputeJacobianAE(self.mbs, 1.0, 0.0, 0.0, False)
-        n = self.solver.GetODE2size()
-        return np.array(S.GetSystemJacobian())[n:, :n][self.ae_keep]
+        S.ComputeJacobianAE(self.mbs, c_pos, c_vel, 0.0, False)
+        J = np.array(S.GetSystemJacobian())
+        a = self._ae0
+        return J[a:, :self.n2], np.diagonal(J[a:, a:]).copy()
+
+    def _Cq(self):
+        """The kept rows of the AE Jacobian: ∂C/∂q on position rows, ∂C/∂q̇ on velocity-level
+        rows (each row has only one of the two, so one call with both factors gives both)."""
+        return self._ae_jacobian(1.0, 1.0 if len(self.velocity_rows) else 0.0)[0][self.ae_keep]
+
+    # ------------------------------------------------------------------ constraint classes
+    def _classify_constraints(self):
+        """Sort Exudyn's algebraic equations (apart from the Euler-parameter norms): rows
+        Exudyn keeps as λ = 0 (``constrainedAxes`` zeros: zero Jacobian row, unit AE
+        diagonal) are dropped; rows with a velocity Jacobian are velocity-level
+        (nonholonomic: rolling); rows that depend linearly on others at q0 (redundant
+        closed loops) are set aside; and the constraints are time-dependent when their
+        residual at q0 changes with the time written into the system."""
+        self.velocity_rows = ()
+        self.time_dependent_constraints = False
+        self.inactive_rows, self.redundant_rows = [], []
+        self._velocity_level, self._exudyn_gt = True, False
+        if not self.n_constraints:
+            return
+        qd0 = self.rates_from_twist(self.q0, self.V0)
+        self._write(self.q0, qd0, self.t0)
+        Cp, diag = self._ae_jacobian(1.0, 0.0)
+        Cv, _ = self._ae_jacobian(0.0, 1.0)
+        keep = []
+        for i in self.ae_keep:
+            if Cp[i].any() or Cv[i].any():
+                keep.append(i)
+            elif diag[i] == 1.0:
+                self.inactive_rows.append(int(i))
+            else:
+                self.redundant_rows.append(int(i))
+        keep = np.array(keep, int)
+        vel = np.array([Cv[i].any() for i in keep], bool)
+        self._velocity_level = self._can_evaluate_velocity_level()
+        if vel.any() and not self._velocity_level:
+            raise InputError(f"Exudyn model: {self._ae_owners([int(i) for i in keep[vel]])} has velocity-level "
+                             "constraint equations, but Exudyn cannot evaluate the model's algebraic "
+                             f"equations at velocity level ({self._velocity_level_error}); lgt_bridge needs "
+                             "them. Run this model with Exudyn's own exu.SolveDynamic.")
+        A = (Cp[keep] + Cv[keep]) @ self.H(self.q0)
+        ind = _independent_rows(A)
+        self.redundant_rows += [int(i) for i in keep[~ind]]
+        self.ae_keep, vel = keep[ind], vel[ind]
+        self.n_constraints = len(self.ae_keep)
+        self.velocity_rows = tuple(int(k) for k in np.flatnonzero(vel))
+        self.time_dependent_constraints = self._detect_time_dependence()
+        self._write(self.q0, qd0, self.t0)
+        if self.redundant_rows:
+            import warnings
+
+            from lgt_bridge.errors import ModelNote
+            warnings.warn(ModelNote(
+                f"Exudyn model: {len(self.redundant_rows)} of its {len(self.redundant_rows) + self.n_constraints} "
+                f"constraint equations are redundant at the initial state (algebraic equations "
+                f"{self.redundant_rows}: {self._ae_owners(self.redundant_rows)}); lgt_bridge sets them "
+                "aside and enforces the others (the motion is the same; their Lagrange multipliers "
+                "are not unique)."), stacklevel=3)
+
+    def _can_evaluate_velocity_level(self):
+        """False when Exudyn refuses the velocity-level algebraic equations (e.g. a generic
+        joint with ``offsetUserFunction_t``: NotImplementedFeatureError); then A V comes
+        from the Jacobian and ∂g/∂t from differences in time."""
+        try:
+            self.solver.ComputeAlgebraicEquations(self.mbs, True)
+            return True
+        except Exception as exc:          # Exudyn raises its own (non-Python) exception types
+            self._velocity_level_error = str(exc).strip().splitlines()[-1][:200]
+            return False
+
+    def _ae_owners(self, rows):
+        """'Object k (TypeName)' for each object owning one of the AE ``rows``."""
+        sd, names = self.sd, []
+        for k in range(sd.NumberOfObjects()):
+            try:
+                ltg = set(sd.GetObjectLTGAE(k))
+            except Exception:                       # objects without algebraic equations
+                continue
+            if ltg & set(rows):
+                o = self.mbs.GetObject(k)
+                names.append(f"object {k} {o.get('name', '')!r} ({o.get('objectType', '?')})")
+        return ", ".join(names) or "unknown objects"
+
+    def _ae_residual(self, q, qd, t, velocity_level):
+        self._write(q, qd, t)
+        self.solver.ComputeAlgebraicEquations(self.mbs, velocity_level)
+        return np.array(self.solver.GetSystemResidual())[self._ae0:][self.ae_keep]
+
+    def _detect_time_dependence(self):
+        """True when the constraint residual at q0 (positions, and velocities at rest)
+        changes with time; then also whether Exudyn's velocity-level residual carries
+        ∂g/∂t (offset user functions with their ``_t`` derivative) — if not, the bridge
+        differentiates g in time itself."""
+        q, z = self.q0, np.zeros(self.n2)
+        ts = self.t0 + np.array([0.0, 0.1234567, 0.7654321])
+        gp = [self._ae_residual(q, z, t, False) for t in ts]
+        gv = [self._ae_residual(q, z, t, True) for t in ts] if self._velocity_level else gp[:1]
+        scale = 1e-13 * (1.0 + np.abs(gp[0]).max() + np.abs(gv[0]).max())
+        self._exudyn_gt = False
+        if all(np.abs(g - gp[0]).max() <= scale for g in gp) and all(
+                np.abs(g - gv[0]).max() <= scale for g in gv):
+            return False
+        if not self._velocity_level:
+            return True
+        pos = self.position_rows
+        ok = True
+        for t in ts:
+            gt = self._gt_fd(q, t)[pos]
+            ev = self._ae_residual(q, z, t, True)[pos]
+            ok &= bool(np.abs(gt - ev).max() <= 1e-6 * (1.0 + np.abs(gt).max()))
+        self._exudyn_gt = ok
+        return True
+
+    def _gt_fd(self, q, t):
+        """∂g/∂t at (q, t) by central differences of the position-level residual."""
+        e = 1e-6 * max(1.0, abs(t))
+        z = np.zeros(self.n2)
+        return (self._ae_residual(q, z, t + e, False) - self._ae_residual(q, z, t - e, False)) / (2 * e)
 
     def _evaluate(self, q, V, t, need_gamma=True):
         """Exudyn's M, Q, C_q at (q, V, t) mapped to twists: (M̄, Q̄, A, γ)."""
@@ -284,7 +420,7 @@ class ExudynModel(Model):
             return Mb, Qb, None, None
         A = self._Cq() @ H
         if need_gamma:
-            gam = self._gamma(q, V)
+            gam = self._gamma(q, V, t)
             self._write(q, qd, t)                         # leave the evaluated state in the system
             return Mb, Qb, A, gam
         return Mb, Qb, A, None
@@ -303,18 +439,48 @@ class ExudynModel(Model):
         out[self._vq] = q[self._vq] + eps * V[self._vv]
         return out
 
-    def _AV_at(self, q, V):
-        """A(q) V from Exudyn's velocity-level constraint residual C_q(q) q̇_e (a vector:
-        no dense Jacobian transfer)."""
-        self._write(q, self.rates_from_twist(q, V), self.sd.GetTime())
-        self.solver.ComputeAlgebraicEquations(self.mbs, True)
-        return np.array(self.solver.GetSystemResidual())[self.solver.GetODE2size():][self.ae_keep]
+    def _AV_at(self, q, V, t):
+        """A(q) V - b(q, t) from Exudyn's velocity-level constraint residual C_q q̇_e + ∂g/∂t
+        (a vector: no dense Jacobian transfer)."""
+        if not self._velocity_level:                    # A V from the Jacobian, + ∂g/∂t
+            self._write(q, self.rates_from_twist(q, V), t)
+            r = self._Cq() @ self.rates_from_twist(q, V)
+            return r + self._gt_fd(q, t) if self.time_dependent_constraints else r
+        r = self._ae_residual(q, self.rates_from_twist(q, V), t, True)
+        if self.time_dependent_constraints and not self._exudyn_gt:
+            pos = self.position_rows
+            r[pos] += self._gt_fd(q, t)[pos] - self._ae_residual(q, np.zeros(self.n2), t, True)[pos]
+        return r
 
-    def _gamma(self, q, V):
-        """γ = d/dt (A(q) V) at fixed V (Exudyn does not provide it): central differences
-        of A V along the path q(s) = τ(q, sV), whose twist is V for all s."""
-        eps = _EPS_GAMMA / max(1.0, float(np.abs(V).max()))
-        return (self._AV_at(self._moved(q, V, eps), V) - self._AV_at(self._moved(q, V, -eps), V)) / (2 * eps)
+    def _gamma(self, q, V, t):
+        """γ = d/dt (A(q) V - b(q, t)) at fixed V (Exudyn does not provide it): central
+        differences of A V - b along the path (τ(q, sV), t + s), whose twist is V for all s."""
+        vmax = max(1.0, float(np.abs(V).max()))
+        eps = _EPS_GAMMA / vmax
+        td = self.time_dependent_constraints
+        if td and not self._exudyn_gt:
+            return self._gamma_second_difference(q, V, t, 1e-3 / vmax)
+        dt = eps if td else 0.0
+        return (self._AV_at(self._moved(q, V, eps), V, t + dt)
+                - self._AV_at(self._moved(q, V, -eps), V, t - dt)) / (2 * eps)
+
+    def _gamma_second_difference(self, q, V, t, e):
+        """γ when Exudyn's velocity-level residual lacks ∂g/∂t (an offset user function
+        without its ``_t``): on position rows γ = φ''(0) for φ(s) = g(τ(q, sV), t + s),
+        by second differences with Richardson extrapolation (error O(e⁴) + rounding/e²);
+        velocity-level rows by central differences of Exudyn's residual."""
+        z = np.zeros(self.n2)
+        phi = {k: self._ae_residual(self._moved(q, V, k * e), z, t + k * e, False) for k in (-2, -1, 0, 1, 2)}
+        d1 = (phi[1] - 2 * phi[0] + phi[-1]) / e ** 2
+        d2 = (phi[2] - 2 * phi[0] + phi[-2]) / (4 * e ** 2)
+        gam = (4 * d1 - d2) / 3
+        if self.velocity_rows:
+            vr = list(self.velocity_rows)
+            ev = _EPS_GAMMA / max(1.0, float(np.abs(V).max()))
+            cv = [self._ae_residual(self._moved(q, V, k * ev), self.rates_from_twist(self._moved(q, V, k * ev), V),
+                                    t + k * ev, True)[vr] for k in (1, -1)]
+            gam[vr] = (cv[0] - cv[1]) / (2 * ev)
+        return gam
 
     # ------------------------------------------------------------------ model protocol
     def f(self, q, V, t):
@@ -332,12 +498,26 @@ class ExudynModel(Model):
         return self._evaluate(q, V, t, need_gamma=False)[1]
 
     def constraints(self, q):
+        return self.constraints_at(q, self.sd.GetTime())
+
+    def constraints_at(self, q, t):
+        """Exudyn's position-level residuals g(q, t) of the kept rows (0 on velocity-level rows)."""
         if not self.n_constraints:
             return np.zeros(0)
         self.sd.SetODE2Coordinates(q - self.ref)
-        self.solver.ComputeAlgebraicEquations(self.mbs)
-        n = self.solver.GetODE2size()
-        return np.array(self.solver.GetSystemResidual())[n:][self.ae_keep]
+        self.sd.SetTime(t)
+        self.solver.ComputeAlgebraicEquations(self.mbs, False)
+        g = np.array(self.solver.GetSystemResidual())[self._ae0:][self.ae_keep]
+        if self.velocity_rows:
+            g[list(self.velocity_rows)] = 0.0
+        return g
+
+    def velocity_rhs(self, q, t):
+        """b(q, t) in A V = b: -∂g/∂t of time-dependent rows (None otherwise)."""
+        if not self.time_dependent_constraints:
+            return None
+        z = np.zeros(self.nv)
+        return -self._AV_at(q, z, t)
 
     def constraint_jacobian(self, q):
         if not self.n_constraints:
@@ -345,8 +525,10 @@ class ExudynModel(Model):
         self.sd.SetODE2Coordinates(q - self.ref)
         return self._Cq() @ self.H(q)
 
-    def constraint_gamma(self, q, V):
-        return self._gamma(q, V) if self.n_constraints else np.zeros(0)
+    def constraint_gamma(self, q, V, t=None):
+        if not self.n_constraints:
+            return np.zeros(0)
+        return self._gamma(q, V, self.sd.GetTime() if t is None else t)
 
     def accelerations(self, q, V, t):
         """Exudyn's ODE2 accelerations q̈_e = H V̇ + Ḣ V at (q, V, t)."""
@@ -355,3 +537,38 @@ class ExudynModel(Model):
 
     def write_back(self, q, V, t):
         self._write(q, self.rates_from_twist(q, V), t)
+
+
+#: rows of the normalized constraint Jacobian whose pivot falls below this count as dependent
+RANK_TOL = 1e-9
+
+
+def _independent_rows(A):
+    """Boolean mask of a maximal set of linearly independent rows of A (pivoted QR of the
+    row-normalized Aᵀ: the rows picked first are kept)."""
+    from scipy.linalg import qr
+    n = A.shape[0]
+    if n == 0:
+        return np.ones(0, bool)
+    norms = np.linalg.norm(A, axis=1)
+    An = A / np.where(norms > 0, norms, 1.0)[:, None]
+    _, R, piv = qr(An.T, mode="economic", pivoting=True)
+    d = np.abs(np.diagonal(R))
+    rank = int(np.sum(d > RANK_TOL * max(d.max(initial=0.0), 1e-300)))
+    mask = np.zeros(n, bool)
+    mask[piv[:rank]] = True
+    return mask
+
+
+def _items_with(mbs, ltg):
+    """'object 3 'name' (Type), ...' for the objects whose ``ltg(k)`` (coordinate indices) is not empty."""
+    sd, names = mbs.systemData, []
+    for k in range(sd.NumberOfObjects()):
+        try:
+            has = len(ltg(k)) > 0
+        except Exception:                   # objects without coordinates of that kind
+            has = False
+        if has:
+            o = mbs.GetObject(k)
+            names.append(f"object {k} {o.get('name', '')!r} ({o.get('objectType', '?')})")
+    return ", ".join(names[:6]) + (", ..." if len(names) > 6 else "") if names else "its nodes"

@@ -79,6 +79,6 @@ class Stepper:
         """Accept (q1, V1) at t1, after projection onto the constraints if the model has them."""
         self.check_finite(t1, q1, V1)
         if self.projector is not None:
-            q1, V1 = self.projector(q1, V1)
+            q1, V1 = self.projector(q1, V1, t1)
             W1 = quats = None
         self.set_state(q1, V1, W1, quats, copy=False)

@@ -2,13 +2,18 @@
 
 Position: Gauss-Newton on a local increment δ (per body a rotation vector in the
 body frame and an inertial translation, i.e. SO(3)xR³ exp coordinates, which is
-what the twist Jacobian A(q) differentiates), minimum M-norm:
-    δ = -M⁻¹Aᵀ (A M⁻¹Aᵀ)⁻¹ g(q),    q <- τ(q, δ)
-Velocity: V <- V - M⁻¹Aᵀ (A M⁻¹Aᵀ)⁻¹ A V.
+what the twist Jacobian A(q) differentiates), minimum M-norm, on the position rows
+g(q, t) of the constraints:
+    δ = -M⁻¹Aₚᵀ (Aₚ M⁻¹Aₚᵀ)⁺ g(q, t),    q <- τ(q, δ)
+Velocity, on every row (velocity-level rows included):
+    V <- V - M⁻¹Aᵀ (A M⁻¹Aᵀ)⁺ (A V - b(q, t))
+with b = -∂g/∂t for time-dependent constraints (zero otherwise). ⁺ is the
+minimum-norm solve of :func:`lgt_bridge.model.solve_schur` (redundant constraints).
 The residuals before and after are kept for the result's statistics.
 """
 import numpy as np
 
+from ..model import solve_schur
 from .local import make_problem
 
 
@@ -18,31 +23,82 @@ class Projector:
         self.model = model
         self.tol, self.max_iter = tol, max_iter
         self.prob = make_problem(model, "SO3xR3", "exp")
+        self.rows = model.position_rows
+        self.all_rows = len(self.rows) == model.n_constraints
         self.max_before = 0.0
         self.max_after = 0.0
         self.max_vel_after = 0.0
         self.iterations = 0
 
-    def _correction(self, q, r):
-        A = self.model.constraint_jacobian(q)
-        MiAt = self.model.solve_mass(q, A.T)
-        return MiAt @ np.linalg.solve(A @ MiAt, r), A, MiAt
+    def _g(self, q, t):
+        g = self.model.constraints_at(q, t)
+        return g if self.all_rows else g[self.rows]
 
-    def __call__(self, q, V):
+    def _A(self, q):
+        A = self.model.constraint_jacobian(q)
+        return A, (A if self.all_rows else A[self.rows])
+
+    def positions(self, q, t):
+        """q moved onto g(q, t) = 0 (position rows); returns (q, residual before, after)."""
         m = self.model
-        g = m.constraints(q)
-        self.max_before = max(self.max_before, float(np.abs(g).max()))
+        g = self._g(q, t)
+        before = float(np.abs(g).max()) if len(g) else 0.0
         for _ in range(self.max_iter):
-            if np.abs(g).max() <= self.tol:
+            if not len(g) or np.abs(g).max() <= self.tol:
                 break
-            d, _, _ = self._correction(q, g)
+            _, Ap = self._A(q)
+            MiAt = m.solve_mass(q, Ap.T)
+            d = MiAt @ solve_schur(Ap @ MiAt, g)
             self.prob.start(q)
             q, _ = self.prob.configuration(self.prob.to_local(-d))
-            g = m.constraints(q)
+            g = self._g(q, t)
             self.iterations += 1
+        return q, before, (float(np.abs(g).max()) if len(g) else 0.0)
+
+    def velocities(self, q, V, t):
+        """V moved onto A(q) V = b(q, t); returns (V, residual after)."""
+        m = self.model
         A = m.constraint_jacobian(q)
+        r = A @ V
+        b = m.velocity_rhs(q, t)
+        if b is not None:
+            r = r - b
         MiAt = m.solve_mass(q, A.T)
-        V = V - MiAt @ np.linalg.solve(A @ MiAt, A @ V)
-        self.max_after = max(self.max_after, float(np.abs(g).max()))
-        self.max_vel_after = max(self.max_vel_after, float(np.abs(A @ V).max()))
+        V = V - MiAt @ solve_schur(A @ MiAt, r)
+        r = A @ V - (0.0 if b is None else b)
+        return V, float(np.abs(r).max())
+
+    def __call__(self, q, V, t=None):
+        q, before, after = self.positions(q, t)
+        V, vel = self.velocities(q, V, t)
+        self.max_before = max(self.max_before, before)
+        self.max_after = max(self.max_after, after)
+        self.max_vel_after = max(self.max_vel_after, vel)
         return q, V
+
+
+def project_initial(model, q0, V0, t0, tol=1e-10):
+    """(q, V, report): the initial state moved onto g(q, t0) = 0 and A V = b when it
+    violates them (inconsistent initial conditions, as Exudyn scripts often have:
+    Exudyn's own implicit solver corrects them in its first step). ``report`` is None
+    when nothing had to move, else a dict with the residuals before and the size of the
+    corrections: ``position``/``velocity`` (largest change of q and V entries) and
+    ``position_residual``/``velocity_residual`` (largest violation before)."""
+    if not model.n_constraints:
+        return q0, V0, None
+    pr = Projector(model, tol=1e-13, max_iter=20)
+    g = pr._g(q0, t0)
+    A = model.constraint_jacobian(q0)
+    b = model.velocity_rhs(q0, t0)
+    rv = A @ V0 - (0.0 if b is None else b)
+    gmax = float(np.abs(g).max()) if len(g) else 0.0
+    vmax = float(np.abs(rv).max()) if len(rv) else 0.0
+    scale_v = 1.0 + float(np.abs(V0).max())
+    if gmax <= tol and vmax <= tol * scale_v:
+        return q0, V0, None
+    q, _, after = pr.positions(q0, t0)
+    V, vel = pr.velocities(q, V0, t0)
+    rep = dict(position_residual=gmax, velocity_residual=vmax,
+               position=float(np.abs(q - q0).max()), velocity=float(np.abs(V - V0).max()),
+               position_residual_after=after, velocity_residual_after=vel)
+    return q, V, rep
