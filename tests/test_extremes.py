@@ -121,4 +121,5 @@ def test_failed_steps_keep_every_earlier_step():
     assert not nan["success"] and nan["steps_kept"] == 49 and nan["t_last"] == pytest.approx(0.49)
     assert "non-finite" in nan["message"]
     assert not newton["success"] and newton["steps_kept"] == 6 and newton["t_last"] == pytest.approx(0.3)
-    assert "Newton diverged" in newton["message"]
+    # the failing step was halved down to min_step before the run gave up
+    assert "Newton" in newton["message"] and "halving the step" in newton["message"]

@@ -332,3 +332,40 @@ def test_importing_genalpha_loads_no_scipy_linalg_or_sparse():
             "print([m for m in ('scipy.linalg', 'scipy.sparse') if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]", out.stdout
+
+
+class _Duffing(Model):
+    """x'' = -k x³ from a large amplitude: stiffness 3 k x² makes a long genalpha step's
+    Newton iteration fail (it did, at dt = 0.02, before steps were cut and retried)."""
+
+    def __init__(self, k=1e4, x0=10.0, nan_after=None):
+        self.layout = Layout.stacked([], n_vector=1)
+        self.q0, self.V0 = np.array([x0]), np.zeros(1)
+        self.k, self.nan_after = k, nan_after
+
+    def f(self, q, V, t):
+        if self.nan_after is not None and t > self.nan_after:
+            return np.full(1, np.nan)
+        return -self.k * q ** 3
+
+
+def test_genalpha_cuts_and_retries_a_step_whose_newton_fails():
+    m = _Duffing()
+    r = simulate(m, (0.0, 0.1), method="genalpha", dt=0.02)
+    assert r.success, r.message
+    assert r.stats["n_rejected"] >= 1            # some steps were halved ...
+    assert r.stats["n_steps"] > 5                # ... so more than 0.1/0.02 steps were taken
+    h = np.diff(r.t)
+    assert h.max() <= 0.02 + 1e-15 and h.min() < 0.02
+    # after a halved step the step grows back to dt
+    first_cut = int(np.flatnonzero(h < 0.02 - 1e-15)[0])
+    assert np.any(np.abs(h[first_cut:] - 0.02) <= 1e-15)
+    assert np.isfinite(r.q).all() and np.isfinite(r.V).all()
+
+
+def test_genalpha_gives_up_at_min_step_with_a_message_that_helps():
+    m = _Duffing(k=1.0, x0=1.0, nan_after=0.05)
+    r = simulate(m, (0.0, 0.1), method="genalpha", dt=0.01)
+    assert not r.success
+    assert "halving the step" in r.message and "min_step" in r.message
+    assert r.t[-1] == pytest.approx(0.05, abs=1e-12)        # the steps before are kept

@@ -4,7 +4,9 @@ Cardona 2015), on the local coordinates of the bridge:
     (1 - α_m) a_{k+1} = (1 - α_f) Ẇ_{k+1} + α_f Ẇ_k - α_m a_k
     W_{k+1} = W_k + h (1 - γ) a_k + h γ a_{k+1}
     ΔX      = h W_k + h² (½ - β) a_k + h² β a_{k+1},      q_{k+1} = τ(q_k, ΔX)
-    M(q) V̇ - Q(q, V, t) + Aᵀ(q) λ = 0,    g(q) = 0          at t_{k+1}
+    M(q) V̇ - Q(q, V, t) + Aᵀ(q) λ = 0,    g(q, t) = 0       at t_{k+1}
+
+(velocity-level rows of the constraints, nonholonomic, hold as A(q) V = b(q, t) instead).
 
 ΔX is an increment in exponential coordinates; on a Cayley chart the step uses
 cay(ΔX/2), which agrees with exp(ΔX) to O(|ΔX|³) and keeps second order.
@@ -69,6 +71,8 @@ def _accepts(fn, keyword):
 class GenAlpha(Stepper):
 
     THETA = 0.1
+    #: at most this many halvings of one step after Newton failures
+    MAX_CUTS = 30
     DIVERGED_HINT = ("Reduce dt, or lower rho_inf for more numerical damping of the highest "
                      "frequencies. The result keeps every step before it.")
 
@@ -79,6 +83,7 @@ class GenAlpha(Stepper):
         m = problem.model
         self.use_M = m.has_mass_matrix
         self.nc = m.n_constraints
+        self._vel_rows = np.array(m.velocity_rows, int) if len(m.velocity_rows) else None
         if self.nc and not self.use_M:
             raise InputError("genalpha on a constrained model needs mass_matrix and forces "
                              "from the model (index-3 residual M V̇ - Q + Aᵀλ).")
@@ -98,6 +103,8 @@ class GenAlpha(Stepper):
         self._prev = None
         self._consts = None
         self.n_jacobians = 0
+        self.min_step = 1e-8          # Exudyn's default timeIntegration.minimumStepSize
+        self.cut_steps = 0
 
     def start(self, t0):
         """Initial accelerations from the index-1 solve: Ẇ_0, a_0 = Ẇ_0."""
@@ -152,7 +159,23 @@ class GenAlpha(Stepper):
             Rd = m.mass_matrix(q1) @ prob.model_acceleration(Wd1, W1, quats) - Q
             if self.rotate_rows:
                 Rd = prob.group_velocity(Rd, quats)
-        return np.concatenate([Rd, m.constraints(q1) / (h * h * self.beta)])
+        return np.concatenate([Rd, self._constraint_rows(q1, V1, t1, h)])
+
+    def _constraint_rows(self, q1, V1, t1, h):
+        """g(q, t)/(h²β) on position rows, (A V - b)/(h γ k) on velocity-level rows (their
+        Jacobian in Ẇ is then A, like the position rows' A Z/(h²β))."""
+        m = self.prob.model
+        g = m.constraints_at(q1, t1) / (h * h * self.beta)
+        if self._vel_rows is None:
+            return g
+        vr = self._vel_rows
+        Av = m.constraint_jacobian(q1)[vr] @ V1
+        b = m.velocity_rhs(q1, t1)
+        if b is not None:
+            Av = Av - b[vr]
+        g = np.array(g, float)
+        g[vr] = Av / self._consts.s_v
+        return g
 
     # --- iteration matrix -------------------------------------------------------------
     def iteration_matrix(self, Wd1, lam, t1, h):
@@ -197,7 +220,12 @@ class GenAlpha(Stepper):
         if nc:
             Ar, Ac, Av = coo(m.constraint_jacobian(q1))
             parts.append((Ac, Ar + n, Av))                                         # Aᵀ
-            gr, gc, gv = Z.rmul(Ar, Ac, Av)
+            pos = np.ones(len(Ar), bool)
+            if self._vel_rows is not None:
+                pos = ~np.isin(Ar, self._vel_rows)
+                vr, vc, vv = Dv.rmul(Ar[~pos], Ac[~pos], Av[~pos])
+                parts.append((vr + n, vc, vv / aff.s_v))                           # A D_v/(hγk)
+            gr, gc, gv = Z.rmul(Ar[pos], Ac[pos], Av[pos])
             parts.append((gr + n, gc, gv / (h * h * self.beta)))                   # A Z/(h²β)
             if lparts is not None:
                 lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
@@ -243,6 +271,31 @@ class GenAlpha(Stepper):
         self._lu_h = h
 
     def attempt(self, t, h):
+        """One step of length h; when Newton fails the step is declined and retried at half
+        the length (down to ``min_step``), as Exudyn's own generalized-α does, and the
+        step grows back (doubling, capped at dt by the driver) once it succeeds."""
+        try:
+            self._attempt(t, h)
+        except StepFailed as exc:
+            if h / 2 >= self.min_step and self.cut_steps < self.MAX_CUTS:
+                self.n_rejected += 1
+                self.cut_steps += 1
+                self._solve, self._prev = None, None
+                return False, 0.5 * h
+            if self.cut_steps:
+                what = str(exc).removesuffix("; reduce dt.").removesuffix(".")
+                raise StepFailed(
+                    f"{what}, after halving the step {self.cut_steps} times (min_step = "
+                    f"{self.min_step:.3g}). Newton fails when the step is too long for the model's "
+                    "fastest motion or stiffest spring, or when the model jumps (a force or user "
+                    "function switching, a constraint locking): lower dt or min_step, or check the "
+                    "model at this time.", exc.error, exc.diverged) from None
+            raise
+        grown = self.cut_steps > 0
+        self.cut_steps = max(0, self.cut_steps - 1)
+        return True, (2.0 * h if grown else None)
+
+    def _attempt(self, t, h):
         """Modified Newton: the stored iteration matrix is refreshed at the current
         iterate whenever the contraction factor ‖Δz_k‖/‖Δz_{k-1}‖ exceeds THETA
         (the body-frame unknowns of SE(3) make it rotate with fast-spinning bodies)."""
@@ -285,7 +338,8 @@ class GenAlpha(Stepper):
         if not converged:
             self._solve = None
             why = "diverged (non-finite residual)" if not finite else f"did not converge in {self.nmax} iterations"
-            raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.")
+            raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
+                             diverged=False)
         W1, dX = self._state(Wd1, h)
         a1 = self._consts.a0 + self._consts.k * Wd1
         q1, quats = self.prob.configuration(dX)
@@ -293,7 +347,6 @@ class GenAlpha(Stepper):
         self._prev = (h, self.Wd, self.lam)
         self.Wd, self.a, self.lam = Wd1, a1, lam
         self.finish(t1, q1, V1, W1, quats)
-        return True, None
 
 
 def _same(h0, h):
