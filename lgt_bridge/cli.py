@@ -43,20 +43,63 @@ class _Parser(argparse.ArgumentParser):
         return super().format_help()
 
 
+def _exec_script(script):
+    """Run ``script`` as ``python script`` would: as ``__main__`` (a fresh module in
+    ``sys.modules``) with ``__file__`` its path made absolute, ``sys.argv == [script]``, its
+    folder (symlinks resolved) first on ``sys.path`` so a multi-file model imports its helpers,
+    in the current working directory. (``runpy.run_path`` neither puts the folder on sys.path
+    nor keeps ``sys.argv[0]`` as given.) ``sys.argv``, ``sys.path`` and ``__main__`` are
+    restored afterwards, and the modules and packages the script newly imported from its
+    folder are forgotten, so a later run in this process imports its own helpers."""
+    import builtins
+    import importlib.machinery
+    import io
+    import os
+    import types
+    path = script if os.path.isabs(script) else os.path.join(os.getcwd(), script)   # as CPython 3.9+
+    folder = os.path.dirname(os.path.realpath(script))
+    with io.open_code(path) as f:
+        code = compile(f.read(), path, "exec", dont_inherit=True)
+    main = types.ModuleType("__main__")
+    main.__dict__.update(__file__=path, __builtins__=builtins, __cached__=None, __package__=None,
+                         __loader__=importlib.machinery.SourceFileLoader("__main__", path))
+    saved_argv, saved_path, saved_modules = sys.argv, list(sys.path), set(sys.modules)
+    saved_main = sys.modules.get("__main__")
+    sys.argv = [script]
+    sys.path.insert(0, folder)
+    sys.modules["__main__"] = main
+    try:
+        exec(code, main.__dict__)
+    finally:
+        sys.argv = saved_argv
+        sys.path[:] = saved_path
+        if saved_main is not None:
+            sys.modules["__main__"] = saved_main
+        new = set(sys.modules) - saved_modules
+        local = set()
+        for top in {name.partition(".")[0] for name in new} & new:
+            f = getattr(sys.modules[top], "__file__", None)
+            if f and os.path.dirname(os.path.realpath(f)) in (folder, os.path.join(folder, top)):
+                local.add(top)
+        for name in new:
+            if name.partition(".")[0] in local:
+                del sys.modules[name]
+
+
 def _run_script(a):
     """Execute ``a.script`` as __main__ with every registered adapter's solver routing active."""
     import contextlib
     import os
-    import runpy
     import time
 
     from .plugins import adapters
     if not os.path.isfile(a.script):
         raise InputError(f"run: no script file {a.script!r}.")
     check_method(a.method, "run --method")
-    for name, v in (("--rtol", a.rtol), ("--atol", a.atol)):
-        if v is not None and not (v > 0 and v < float("inf")):
-            raise InputError(f"run {name} = {v}: must be a positive number.")
+    if a.rtol is not None and not (0 <= a.rtol < float("inf")):      # 0: pure absolute tolerance
+        raise InputError(f"run --rtol = {a.rtol}: must be zero or a positive number.")
+    if a.atol is not None and not (0 < a.atol < float("inf")):
+        raise InputError(f"run --atol = {a.atol}: must be a positive number.")
     options = dict(method=a.method, group=a.group, chart=a.chart, rtol=a.rtol, atol=a.atol,
                    progress=a.progress)
     t0 = time.perf_counter()
@@ -73,8 +116,7 @@ def _run_script(a):
         if not routed:
             raise InputError("run: no engine adapter with solver routing is installed "
                              "(pip install 'lgt-bridge[exudyn]').")
-        sys.argv = [a.script]
-        runpy.run_path(a.script, run_name="__main__")
+        _exec_script(a.script)
     n = sum(len(calls) for _, _, calls in routed)
     wall = time.perf_counter() - t0
     tols = (f"rtol={a.rtol:g}, atol={a.atol:g}" if a.rtol is not None and a.atol is not None else
@@ -162,11 +204,14 @@ def _parser():
                        "mbs.SolveDynamic call it makes is integrated by the bridge (the script's\n"
                        "sensors, solution file and final state keep working). Other solver calls and\n"
                        "hand-written loops (e.g. a Pinocchio aba loop) run as written.",
-                       epilog="tolerances: adaptive methods (dopri5, dop853, scipy:*) use --rtol/--atol;\n"
-                       "  when absent, the script's own simulationSettings.timeIntegration.\n"
-                       "  relativeTolerance/absoluteTolerance (Exudyn's defaults: 1e-8, 1e-8) if its\n"
-                       "  automaticStepSize is True, else rtol=1e-6, atol=1e-8. Fixed-step methods\n"
-                       "  (euler, rkmk2, rkmk4, genalpha) step at endTime/numberOfSteps.\n"
+                       epilog="tolerances: adaptive methods (dopri5, dop853, scipy:*) use --rtol/--atol\n"
+                       "  (--rtol 0: pure absolute tolerance); when absent, the script's own\n"
+                       "  simulationSettings.timeIntegration.relativeTolerance/absoluteTolerance\n"
+                       "  (Exudyn's defaults: 1e-8, 1e-8) if its automaticStepSize is True. With\n"
+                       "  automaticStepSize False and no --rtol/--atol, dopri5 and dop853 take fixed\n"
+                       "  steps of (endTime-startTime)/numberOfSteps (scipy:* use rtol=1e-6, atol=1e-8).\n"
+                       "  Fixed-step methods (euler, rkmk2, rkmk4, genalpha) step at that interval.\n"
+                       "  minimumStepSize, initialStepSize and startTime are honoured as by Exudyn.\n"
                        "Each routed call prints one line: method, group, chart, tolerances, steps.")
     r.add_argument("script", help="the legacy script (.py)")
     r.add_argument("--method", default="dopri5", metavar="METHOD",

@@ -233,6 +233,18 @@ def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6,
     return stepper, dt
 
 
+def _note_initial_projection(rep, t0):
+    import warnings
+
+    from .errors import ModelNote
+    warnings.warn(ModelNote(
+        f"the initial state at t = {t0:g} violates the constraints (positions by "
+        f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
+        f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
+        f"{rep['velocity']:.3g} (as Exudyn's implicit solver does in its first step). Make the "
+        "initial state consistent to silence this note."), stacklevel=4)
+
+
 class Driver:
     """Advances a stepper to target times. Fixed steps of dt land on each target (the
     last step shortened); adaptive methods with a continuous extension step freely up
@@ -255,6 +267,7 @@ class Driver:
             q0, V0, self.initial_projection = project_initial(model, q0, V0, self.t)
             if self.initial_projection is not None:
                 model.write_back(q0, V0, self.t)
+                _note_initial_projection(self.initial_projection, self.t)
         stepper.set_state(q0, V0)
         self.h = dt if dt is not None else stepper.initial_step(self.t)
 

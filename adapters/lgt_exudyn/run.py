@@ -13,6 +13,8 @@ def route_solve_dynamic(options):
     from .solve import SolveDynamic, describe
 
     calls = []
+    options = dict(options)
+    options.setdefault("verbose", False)     # the routed call prints its own line below
     original = exudyn.solver.SolveDynamic
 
     def routed(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,

@@ -2,16 +2,19 @@
 
 The bridge plugs into Exudyn's own step loop (``MainSolverImplicitSecondOrder.
 SetUserFunctionNewton``): Exudyn keeps its time loop, sensors, solution file and
-final state; each of its steps is computed by the bridge from the state at the
-start of the step. Adaptive methods take as many internal steps as their error
-control needs between two Exudyn output steps.
+final state (so ``solution.file.writePeriod`` and ``solution.sensors.writePeriod`` work
+as with Exudyn's own solvers); each of its steps is computed by the bridge from the
+state at the start of the step. Adaptive methods step freely, as their error control
+needs, and interpolate Exudyn's output steps with their dense output.
 """
+import sys
 import time
-
 
 from lgt_bridge import auto as _auto
 from lgt_bridge.errors import InputError, StepError
 from lgt_bridge.integrators.base import StepFailed
+from lgt_bridge.integrators.rkmk import FixedRK
+from lgt_bridge.integrators.tableaux import ADAPTIVE as _TABLEAUX, Tableau
 from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulate import Driver, _check_inputs, make_stepper
 
@@ -19,26 +22,46 @@ from .model import ExudynModel
 
 ADAPTIVE = ("dopri5", "dop853")
 
+_noted = set()          # one-time notes already printed in this process
+
+
+def _note_once(key, text):
+    if key not in _noted:
+        _noted.add(key)
+        print(f"lgt-bridge: note: {text}", file=sys.stderr)
+
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
                  method="dopri5", group="SE3", chart="exp", rtol=None, atol=None, rho_inf=0.9,
-                 project=True, verbose=False, accelerations=True, progress=None):
+                 project=True, verbose=None, accelerations=True, progress=None):
     """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
     ignored), integrated by the bridge with ``method``/``group``/``chart``.
 
-    Honours ``timeIntegration.startTime``, ``endTime``, ``numberOfSteps`` (the output
-    step; fixed-step methods step with it), ``automaticStepSize`` with
-    ``relativeTolerance``/``absoluteTolerance`` for adaptive methods (``rtol``/``atol``
-    override them; without either, 1e-6/1e-8), sensors and the solution file as configured.
-    ``group``/``chart`` may be "auto" as in :func:`lgt_bridge.simulate`. ``progress``:
-    a tqdm bar on stderr as in ``simulate`` (None: only for runs longer than about 1 s on a
-    terminal, never in CI; True/False force it). ``verbose`` prints one line saying which
-    method, group, chart and tolerances were used (see :func:`describe`). Returns True, and
-    leaves the final state in the system (``accelerations``: also the engine's
-    accelerations after each output step, one more f evaluation each, for the solution
-    file and acceleration sensors). A failed step raises StepError with the
-    system at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
+    Honours from ``simulationSettings.timeIntegration``:
+
+    - ``startTime``, ``endTime``, ``numberOfSteps``: Exudyn's output step
+      h = (endTime − startTime)/numberOfSteps. Fixed-step methods (euler, rkmk2, rkmk4,
+      genalpha) step with h.
+    - ``automaticStepSize``: True (Exudyn's default): dopri5/dop853 control their step by
+      ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``,
+      are not capped at h, and give Exudyn's output steps by dense output. False: dopri5/
+      dop853 take fixed steps of h with their own tableau (as Exudyn's DOPRI5 does), unless
+      ``rtol``/``atol`` are passed here, which always select error control.
+    - ``minimumStepSize`` (error control: a step the controller would shrink below it fails
+      with StepError), ``initialStepSize`` (error control: the first trial step when > 0;
+      0: the bridge's own starting-step estimate).
+    - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``; ``verbose``
+      False silences it). ``realtime.active``/``simulateInRealtime``: ignored (one note).
+
+    ``rtol``/``atol`` override the settings' tolerances (without either and without
+    automaticStepSize: 1e-6/1e-8). ``group``/``chart`` may be "auto" as in
+    :func:`lgt_bridge.simulate`. ``progress``: a tqdm bar on stderr as in ``simulate``
+    (None: only for runs longer than about 1 s on a terminal, never in CI; True/False force
+    it). Returns True, and leaves the final state in the system (``accelerations``: also the
+    engine's accelerations after each output step, one more f evaluation each, for the
+    solution file and acceleration sensors). A failed step raises StepError with the system
+    at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
     """
     import exudyn as exu
     if simulationSettings is None:
@@ -54,26 +77,55 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         raise InputError(f"simulationSettings.timeIntegration.endTime = {t1} must be greater than "
                          f"simulationSettings.timeIntegration.startTime = {t0}; set endTime > startTime.")
     h_out = (t1 - t0) / n
-    adaptive = method in ADAPTIVE or str(method).startswith("scipy:")
+    auto_step = bool(ti.automaticStepSize)
+    # automaticStepSize=False: Exudyn's DOPRI5 steps at h_out; so does ours, unless the
+    # caller asked for error control by passing tolerances
+    fixed_tableau = method in ADAPTIVE and not auto_step and rtol is None and atol is None
+    controlled = method in ADAPTIVE and not fixed_tableau
+    adaptive = controlled or str(method).startswith("scipy:")
     tol_source = "given"
     if rtol is None or atol is None:
         tol_source = "default"
-        if adaptive and ti.automaticStepSize:
+        if adaptive and auto_step:
             tol_source = "timeIntegration.relative/absoluteTolerance"
             rtol = rtol if rtol is not None else float(ti.relativeTolerance)
             atol = atol if atol is not None else float(ti.absoluteTolerance)
-    rtol = 1e-6 if rtol is None else rtol
-    atol = 1e-8 if atol is None else atol
-    dt = None if method in ADAPTIVE else h_out
+    rtol = 1e-6 if rtol is None else float(rtol)
+    atol = 1e-8 if atol is None else float(atol)
+    h_min = float(ti.minimumStepSize) if controlled else 0.0
+    h_init = float(ti.initialStepSize) if controlled and ti.initialStepSize > 0 else None
+    if controlled:
+        dt = h_init
+    else:
+        dt = h_out
     _check_inputs(model, (t0, t1), method, dt if dt is not None else h_out, rtol, atol, None, None,
                   None, 1)
+    realtime = getattr(ti, "realtime", None)
+    if realtime is not None and realtime.active:
+        _note_once("realtime", "simulationSettings.timeIntegration.realtime.active (simulateInRealtime) "
+                   "is ignored by lgt_bridge's SolveDynamic: it runs as fast as it can.")
     group_asked, chart_asked = group, chart
     if _auto.wants_auto(group, chart):
         choice = _auto.choose(model, group, chart, method=method, project=project)
         group, chart = choice.groups, choice.charts
     stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                project=project, rho_inf=rho_inf, span=(t0, t1))
-    drv = Driver(model, stepper, dt, t0, model.q0, model.V0, t_end=t1)
+    if fixed_tableau:
+        stepper = FixedRK(stepper.prob, _fixed_tableau(method), stepper.projector)
+    # a pre-step user function changes the model at Exudyn's step times (Exudyn calls it
+    # once per step, before the step, with the step's end time): the bridge's steps then
+    # end on Exudyn's steps instead of stepping over them with dense output
+    prestep = _has_user_function(mbs, "GetPreStepUserFunction")
+    if hasattr(stepper, "min_step"):             # genalpha halves failing steps down to it
+        stepper.min_step = float(ti.minimumStepSize)
+    drv = _Driver(model, stepper, dt, t0, model.q0, model.V0, t_end=None if prestep else t1,
+                  consistent=project)
+    first_step = drv.h
+    if controlled:
+        drv.h_min = h_min
+        drv.why = (f"the error control of {method} at rtol={rtol:g}, atol={atol:g} needs smaller steps there "
+                   "(a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
+                   "minimumStepSize, or use method='genalpha'.")
     bar = simulation_bar(progress, t0, t1, drv, stepper, desc="SolveDynamic")
     on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
     sd = mbs.systemData
@@ -83,6 +135,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     def newton(solver, mbs_, settings):
         h = solver.it.currentStepSize
         ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
+        if prestep:                  # the model may have changed: no stage carried over
+            stepper.set_state(stepper.q, stepper.V)
         try:
             q_out, V_out = drv.advance_to(ts + h, on_step)
         except StepFailed as exc:
@@ -97,12 +151,16 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
 
     solver = exu.MainSolverImplicitSecondOrder()
     solver.SetUserFunctionNewton(mbs, newton)
-    ti_auto = ti.automaticStepSize
+    saved = [(ti, "automaticStepSize", auto_step)]
     ti.automaticStepSize = False                 # Exudyn steps at the output interval
+    if realtime is not None and realtime.active:
+        saved.append((realtime, "active", True))
+        realtime.active = False
     try:
         solver.SolveSystem(mbs, simulationSettings)
     finally:
-        ti.automaticStepSize = ti_auto
+        for obj, name, value in saved:
+            setattr(obj, name, value)
         bar.close()
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,
@@ -111,12 +169,18 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               n_rejected=stepper.n_rejected, n_newton=stepper.n_newton,
               wall_s=time.perf_counter() - wall0, exudyn_steps=n, success=not failure,
               message=failure[0] if failure else "reached endTime")
+    if controlled:
+        st.update(first_step=first_step, minimum_step=h_min)
+    if drv.initial_projection is not None:
+        st["initial_projection"] = drv.initial_projection
+    if model.redundant_rows:
+        st["redundant_constraints"] = len(model.redundant_rows)
     if stepper.projector is not None:
         st["constraint_after_projection"] = stepper.projector.max_after
     mbs.sys["lgtBridgeStats"] = st
     if storeSolver:
         mbs.sys["dynamicSolver"] = solver
-    if verbose:
+    if verbose or (verbose is None and ti.verboseMode > 0):
         print(f"lgt-bridge: SolveDynamic {describe(st)}: {drv.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")
     if failure:
@@ -125,6 +189,39 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), exu.ConfigurationType.Initial)
     return True
+
+
+def _has_user_function(mbs, getter):
+    """True when the system has the user function ``getter`` returns (Exudyn returns 0 when unset)."""
+    try:
+        return bool(getattr(mbs, getter)())
+    except Exception:
+        return False
+
+
+def _fixed_tableau(method):
+    """The tableau of an embedded pair for fixed steps: its propagating weights b, without the
+    FSAL end-point stage (b is 0 there; a fixed step would evaluate it for nothing)."""
+    tab = _TABLEAUX[method]()
+    k = tab.stages - 1 if tab.fsal and tab.b[-1] == 0.0 else tab.stages
+    return Tableau(tab.name, tab.A[:k, :k], tab.b[:k], tab.c[:k], tab.order)
+
+
+class _Driver(Driver):
+    """A Driver whose error control may not shrink the step below ``h_min`` (Exudyn's
+    minimumStepSize). A small step the caller chose (initialStepSize) or the landing
+    step on endTime is not a failure; the controller reducing its step below h_min is."""
+
+    h_min = 0.0
+    why = ""
+
+    def _step(self, target, on_step):
+        h_before = self.h
+        super()._step(target, on_step)
+        if self.h < self.h_min and self.h < h_before and self.t < target - 1e-12 * max(1.0, abs(target)):
+            raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
+                             f"simulationSettings.timeIntegration.minimumStepSize = {self.h_min:g}: "
+                             + self.why)
 
 
 def _summary(resolved, asked):
@@ -141,6 +238,8 @@ def describe(st):
         src = {"given": "", "default": " (bridge default)"}.get(
             st["tolerance_source"], f" (from simulationSettings.{st['tolerance_source']})")
         tol = f"rtol={st['rtol']:g}, atol={st['atol']:g}{src}"
+    elif st["method"] in ADAPTIVE:
+        tol = f"fixed step {st['dt']:g} s (automaticStepSize=False: endTime/numberOfSteps)"
     else:
         tol = f"fixed step {st['dt']:g} s (from endTime/numberOfSteps)"
     return f"{st['method']} on {st['group']}/{st['chart']}, {tol}"
