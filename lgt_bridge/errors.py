@@ -27,3 +27,8 @@ class ModelNote(UserWarning):
     """Something lgt_bridge noticed about a model and handled, which the user should
     know: redundant constraint equations it set aside, an inconsistent initial state it
     moved onto the constraints."""
+
+
+class ModelError(LGTError, RuntimeError):
+    """The wrapped engine raised while evaluating the model (a user function failed, or
+    the engine rejected a state); the message names the time and the engine's message."""

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import auto as _auto
-from .errors import ChartDomainError, InputError, StepError
+from .errors import ChartDomainError, InputError, ModelError, StepError
 from .integrators import METHODS
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector, project_initial
@@ -279,7 +279,10 @@ class Driver:
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
-        accepted, h_new = st.attempt(self.t, h_try)
+        try:
+            accepted, h_new = st.attempt(self.t, h_try)
+        except ModelError as exc:           # the engine raised: end the run, keep the steps
+            raise StepFailed(str(exc), error=ModelError) from exc
         if accepted:
             self.n_steps += 1
             self.t = target if hit else self.t + h_try

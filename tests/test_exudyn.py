@@ -225,6 +225,30 @@ def test_failing_step_leaves_system_at_last_good_state():
     assert mbs.systemData.GetTime() == pytest.approx(0.02) and np.isfinite(em.total_q(mbs)).all()
 
 
+def _raising_load(mbs, t, load):
+    if t > 0.0205:
+        raise ValueError("the user's load function failed")
+    return [1.0, 0, 0]
+
+
+@pytest.mark.parametrize("method", ["rkmk4", "genalpha"])
+def test_user_function_that_raises_ends_the_run_with_its_message(method):
+    """An exception inside a user function reaches the user as lgt_bridge's error with the
+    user's own message (not Exudyn's ModelError wrapping a traceback); the steps before are
+    kept and the system is left at the last good state."""
+    SC, mbs = em.spring_body_with_load()[:2]
+    mbs.SetLoadParameter(0, "loadVectorUserFunction", _raising_load)
+    r = simulate(ExudynModel(mbs), (0, 0.1), method=method, dt=1e-3)
+    assert not r.success and "ValueError: the user's load function failed" in r.message
+    assert "loadVectorUserFunction" in r.message
+    assert r.t[-1] == pytest.approx(0.02) and np.isfinite(r.q).all()
+    SC, mbs = em.spring_body_with_load()[:2]
+    mbs.SetLoadParameter(0, "loadVectorUserFunction", _raising_load)
+    with pytest.raises(StepError, match="the user's load function failed.*left at t = 0.02"):
+        SolveDynamic(mbs, em.settings(0.1, 100), method=method)
+    assert mbs.systemData.GetTime() == pytest.approx(0.02) and np.isfinite(em.total_q(mbs)).all()
+
+
 def test_bench_scene_with_exudyn_natives(tmp_path):
     """exudyn_heavy_top: Exudyn's generalized-α on EP and on RotVecLG (converted to the EP
     model's coordinates) converge to the bridge's reference with the steps."""

@@ -16,7 +16,7 @@ import numpy as np
 
 from lgt_bridge import lgt as _lgt
 from lgt_bridge import params
-from lgt_bridge.errors import InputError
+from lgt_bridge.errors import InputError, LGTError, ModelError
 from lgt_bridge.groups._vec import hat
 from lgt_bridge.model import Layout, Model, RigidBody, solve_kkt
 
@@ -31,6 +31,31 @@ _EPS_GAMMA = 1e-5
 def _exudyn():
     import exudyn
     return exudyn
+
+
+def _engine_call(method):
+    """Turn an exception Exudyn raises inside ``method`` (a user function that failed, an
+    evaluation Exudyn rejects) into a ModelError naming the time and Exudyn's message; the
+    original stays chained (``--debug`` shows it)."""
+    import functools
+
+    @functools.wraps(method)
+    def call(self, *args):
+        try:
+            return method(self, *args)
+        except LGTError:
+            raise
+        except Exception as exc:
+            text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
+            lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
+            what = " ".join(lines) if lines else type(exc).__name__
+            if len(what) > 300:
+                what = what[:300] + "..."
+            t = self.sd.GetTime()
+            raise ModelError(f"Exudyn raised while lgt_bridge evaluated the model ({method.__name__}) at "
+                             f"t = {t:.9g}: {what}. If a user function failed, "
+                             "fix it (run the script with Exudyn's own solver to see it in context).") from exc
+    return call
 
 
 class ExudynModel(Model):
@@ -483,23 +508,27 @@ class ExudynModel(Model):
         return gam
 
     # ------------------------------------------------------------------ model protocol
+    @_engine_call
     def f(self, q, V, t):
         M, Q, A, gam = self._evaluate(q, V, t)
         if A is None:
             return np.linalg.solve(M, Q)
         return solve_kkt(M, A, Q, -gam)[0]
 
+    @_engine_call
     def mass_matrix(self, q):
         if self._Mbar is not None:
             return self._Mbar.copy()
         return self._evaluate(q, np.zeros(self.nv), self.sd.GetTime(), need_gamma=False)[0]
 
+    @_engine_call
     def forces(self, q, V, t):
         return self._evaluate(q, V, t, need_gamma=False)[1]
 
     def constraints(self, q):
         return self.constraints_at(q, self.sd.GetTime())
 
+    @_engine_call
     def constraints_at(self, q, t):
         """Exudyn's position-level residuals g(q, t) of the kept rows (0 on velocity-level rows)."""
         if not self.n_constraints:
@@ -512,6 +541,7 @@ class ExudynModel(Model):
             g[list(self.velocity_rows)] = 0.0
         return g
 
+    @_engine_call
     def velocity_rhs(self, q, t):
         """b(q, t) in A V = b: -∂g/∂t of time-dependent rows (None otherwise)."""
         if not self.time_dependent_constraints:
@@ -519,17 +549,20 @@ class ExudynModel(Model):
         z = np.zeros(self.nv)
         return -self._AV_at(q, z, t)
 
+    @_engine_call
     def constraint_jacobian(self, q):
         if not self.n_constraints:
             return np.zeros((0, self.nv))
         self.sd.SetODE2Coordinates(q - self.ref)
         return self._Cq() @ self.H(q)
 
+    @_engine_call
     def constraint_gamma(self, q, V, t=None):
         if not self.n_constraints:
             return np.zeros(0)
         return self._gamma(q, V, self.sd.GetTime() if t is None else t)
 
+    @_engine_call
     def accelerations(self, q, V, t):
         """Exudyn's ODE2 accelerations q̈_e = H V̇ + Ḣ V at (q, V, t)."""
         Vd = self.f(q, V, t)
