@@ -1,4 +1,5 @@
 """``simulate``: run a model on a bridge integrator and collect the result."""
+from functools import partial
 import time
 from dataclasses import dataclass, field
 
@@ -252,7 +253,8 @@ class Driver:
     output times never shorten steps). Counts steps; raises StepFailed.
 
     ``consistent``: a constrained model's initial state is first moved onto its
-    constraints when it violates them (:func:`.integrators.constraints.project_initial`);
+    constraints when it violates them (the model's ``project_initial(q0, V0, t0)`` when it
+    has one, else :func:`.integrators.constraints.project_initial`);
     ``initial_projection`` says how far (None: it was consistent)."""
 
     def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None,
@@ -264,7 +266,8 @@ class Driver:
         self.n_steps = 0
         self.initial_projection = None
         if consistent and model.n_constraints:
-            q0, V0, self.initial_projection = project_initial(model, q0, V0, self.t)
+            own = getattr(model, "project_initial", None)     # an engine's own rule, if it has one
+            q0, V0, self.initial_projection = (own or partial(project_initial, model))(q0, V0, self.t)
             if self.initial_projection is not None:
                 model.write_back(q0, V0, self.t)
                 _note_initial_projection(self.initial_projection, self.t)

@@ -95,7 +95,7 @@ def rolling_wheel():
     v0 = np.cross(w0, p0)
     b = mbs.CreateRigidBody(inertia=inertia, nodeType=RXYZ, referencePosition=p0, referenceRotationMatrix=R0,
                             initialVelocity=v0, initialAngularVelocity=w0, gravity=G3)
-    mbs.CreateRollingDisc(itemNumbers=[ground, b], axisPosition=[0, 0, 0], axisVector=[1, 0, 0],
+    mbs.CreateRollingDisc(bodyNumbers=[ground, b], axisPosition=[0, 0, 0], axisVector=[1, 0, 0],
                           discRadius=r, planePosition=[0, 0, 0])
     mF = mbs.AddMarker(MarkerBodyPosition(bodyNumber=b))
     mbs.AddLoad(LoadForceVector(markerNumber=mF, loadVector=[0.0, 0.0, 0.0],

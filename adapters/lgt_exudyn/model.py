@@ -166,6 +166,9 @@ class ExudynModel(Model):
         s.solution.sensors.active = False
         s.show.computationTime = False
         s.show.statistics = False
+        # the bridge computes its own initial accelerations; Exudyn's would fail (with a
+        # warning) on redundant constraints
+        s.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
         self.solver.InitializeSolver(self.mbs, s)
 
     # ------------------------------------------------------------------ velocity maps
@@ -373,6 +376,76 @@ class ExudynModel(Model):
         except Exception as exc:          # Exudyn raises its own (non-Python) exception types
             self._velocity_level_error = str(exc).strip().splitlines()[-1][:200]
             return False
+
+    def project_initial(self, q0, V0, t0, tol=1e-12, max_iter=60):
+        """The initial state moved onto the constraints the way Exudyn's own solver moves it
+        in its first step (its limit for small steps): positions to the q₁ on g(q₁, t0) = 0
+        with M(q₁) Δ = C_q(q₁)ᵀ μ, Δ the step in each node's own coordinates (the plain
+        difference for Euler parameters, positions, angles and vector coordinates; the
+        body-frame increment for RotVecLG nodes) with Exudyn's mass matrix and its
+        Euler-parameter rows; then velocities M-orthogonally onto A V = b at q₁. Returns
+        (q, V, report) as :func:`lgt_bridge.integrators.constraints.project_initial`."""
+        from lgt_bridge.integrators.constraints import project_initial as generic
+        if not self.n_constraints:
+            return q0, V0, None
+        rows = np.array(sorted(self.ep_ae) + [int(self.ae_keep[k]) for k in self.position_rows], int)
+        z = np.zeros(self.n2)
+        g = self._ae_residual_rows(q0, t0, rows)
+        if len(g) and np.abs(g).max() > tol:
+            q, D = q0, np.zeros(self.n2)
+            nae = len(rows)
+            for _ in range(max_iter):
+                self._write(q, z, t0)
+                self.solver.ComputeMassMatrix(self.mbs)
+                M = np.array(self.solver.GetSystemMassMatrix())
+                C = self._ae_jacobian(1.0, 0.0)[0][rows]
+                K = np.block([[M, C.T], [C, np.zeros((nae, nae))]])
+                rhs = np.concatenate([np.zeros(self.n2), C @ D - g])
+                D_new = np.linalg.lstsq(K, rhs, rcond=1e-13)[0][:self.n2]
+                step = np.abs(D_new - D).max()
+                D = D_new
+                q = self._plus(q0, D)
+                g = self._ae_residual_rows(q, t0, rows)
+                if np.abs(g).max() <= tol and step <= 1e-12 * (1.0 + np.abs(D).max()):
+                    break
+            else:
+                raise InputError(f"Exudyn model: the initial positions violate the constraints by "
+                                 f"{np.abs(self._ae_residual_rows(q0, t0, rows)).max():.3g} and could not be "
+                                 f"moved onto them ({max_iter} iterations left {np.abs(g).max():.3g}); "
+                                 "start the model closer to a consistent configuration.")
+        else:
+            q = q0
+        q1, V1, rep = generic(self, q, V0, t0)            # velocities (positions already hold)
+        if q is q0 and rep is None:
+            return q0, V0, None
+        g0 = self._ae_residual_rows(q0, t0, rows)
+        b = self.velocity_rhs(q0, t0)
+        A0 = self.constraint_jacobian(q0)
+        rv = A0 @ V0 - (0.0 if b is None else b)
+        self._write(q1, self.rates_from_twist(q1, V1), t0)
+        return q1, V1, dict(
+            position_residual=float(np.abs(g0).max()) if len(g0) else 0.0,
+            velocity_residual=float(np.abs(rv).max()) if len(rv) else 0.0,
+            position=float(np.abs(q1 - q0).max()), velocity=float(np.abs(V1 - V0).max()),
+            position_residual_after=float(np.abs(self._ae_residual_rows(q1, t0, rows)).max()) if len(rows) else 0.0,
+            velocity_residual_after=(rep or {}).get("velocity_residual_after", 0.0))
+
+    def _ae_residual_rows(self, q, t, rows):
+        self._write(q, np.zeros(self.n2), t)
+        self.solver.ComputeAlgebraicEquations(self.mbs, False)
+        return np.array(self.solver.GetSystemResidual())[self._ae0:][rows]
+
+    def _plus(self, q0, D):
+        """q0 moved by D in Exudyn's own increments: plain addition, except RotVecLG
+        rotations, R = R0 exp(Dθ) (body frame)."""
+        q = q0 + D
+        if "RigidBodyRotVecLG" in self._moving:
+            qi, vi = self._moving["RigidBodyRotVecLG"]
+            tw = np.zeros(vi.shape)
+            tw[:, :3] = D[qi[:, 3:]]
+            tw[:, 3:] = D[qi[:, :3]]
+            q[qi] = self._lgt(RIGID["RigidBodyRotVecLG"]).tau(q0[qi], tw)
+        return q
 
     def _ae_owners(self, rows):
         """'Object k (TypeName)' for each object owning one of the AE ``rows``."""
