@@ -59,9 +59,16 @@ def _engine_call(method):
 
 
 class ExudynModel(Model):
-    """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate.simulate`."""
+    """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate.simulate`.
 
-    def __init__(self, mbs, simulationSettings=None):
+    backend: 'numba' (compiled conversions, :mod:`.kernels`) or 'numpy' (the reference
+    methods below); default $LGT_BRIDGE_BACKEND, else numba. Build the model again after
+    ``mbs.Assemble()``: the compiled path writes through views of Exudyn's state."""
+
+    def __init__(self, mbs, simulationSettings=None, backend=None):
+        from lgt_bridge import backend as _backend
+        self._compiled = _backend.compiled(backend)
+        self._P = None                  # the kernels' pack (built at the first f)
         exu = _exudyn()
         self.exu, self.mbs = exu, mbs
         if not getattr(mbs, "systemIsConsistent", False):
@@ -583,6 +590,13 @@ class ExudynModel(Model):
     # ------------------------------------------------------------------ model protocol
     @_engine_call
     def f(self, q, V, t):
+        if self._compiled:
+            if self._P is None:
+                from . import kernels
+                self._kernels = kernels
+                self._P = kernels.pack(self)
+            return self._kernels.f_compiled(self, self._P, np.ascontiguousarray(q, float),
+                                            np.ascontiguousarray(V, float), float(t))
         M, Q, A, gam = self._evaluate(q, V, t)
         if A is None:
             return np.linalg.solve(M, Q)

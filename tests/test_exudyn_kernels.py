@@ -1,0 +1,241 @@
+"""The compiled kernels of the Exudyn adapter (lgt_exudyn.kernels) against ExudynModel's
+numpy methods, on real Exudyn models: EP, RotVecLG and Rxyz nodes (Rxyz away from gimbal
+lock), mixed with a point mass, a spring-loaded body, a revolute chain, bodies with the
+node off the centre of mass (configuration-dependent M̄) and free bodies. Each kernel is
+equal to its reference to 1e-13 relative; the assembled f (kernels + Exudyn calls, with the
+γ finite differences) to 1e-9, since a last-bit difference of the moved state is divided
+by the 1e-5 difference step. Skipped only when exudyn is not installed."""
+import numba
+import numpy as np
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from exudyn.utilities import ObjectGround, RigidBodyInertia  # noqa: E402
+
+from lgt_bridge.model import solve_kkt  # noqa: E402
+from lgt_exudyn import kernels as K  # noqa: E402
+from lgt_exudyn import scenes  # noqa: E402
+from lgt_exudyn.model import ExudynModel  # noqa: E402
+
+import exudyn_models as em  # noqa: E402
+from backend_checks import close, run_python  # noqa: E402
+
+
+def offset_com_pendulum(node=em.EP):
+    """A body hanging from a spherical joint with its node off the centre of mass: the twist
+    mass matrix depends on the rotation (no constant M̄)."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    g = mbs.AddObject(ObjectGround())
+    inertia = RigidBodyInertia(mass=2.0, inertiaTensor=np.diag([0.1, 0.2, 0.3]), com=[0.0, 0.3, 0.1],
+                               inertiaTensorAtCOM=True)
+    b = mbs.CreateRigidBody(inertia=inertia, nodeType=node, referencePosition=[0, 1, 0],
+                            initialAngularVelocity=[1, 2, 3], gravity=em.G)
+    mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[0, 0, 0])
+    mbs.Assemble()
+    return SC, mbs
+
+
+MODELS = {
+    "top EP": lambda: em.heavy_top(em.EP)[:2],
+    "top RotVecLG": lambda: em.heavy_top(em.ROTVEC)[:2],
+    "top Rxyz": lambda: em.heavy_top(em.RXYZ)[:2],
+    "mixed EP": lambda: em.mixed_with_point_mass(em.EP),
+    "mixed Rxyz": lambda: em.mixed_with_point_mass(em.RXYZ),
+    "spring RotVecLG": lambda: em.spring_body_with_load(em.ROTVEC),
+    "revolute chain Rxyz": lambda: em.chain(3, em.RXYZ, joint="revolute"),
+    "offset com EP": lambda: offset_com_pendulum(em.EP),
+    "offset com Rxyz": lambda: offset_com_pendulum(em.RXYZ),
+    "free EP": lambda: scenes.free_bodies(3, em.EP),
+}
+
+
+@pytest.fixture(scope="module", params=list(MODELS))
+def built(request):
+    SC, mbs = MODELS[request.param]()
+    m = ExudynModel(mbs)
+    return SC, m, K.pack(m)
+
+
+def states(m, rng, n=3):
+    """Random states near q0 (Rxyz nodes kept away from gimbal lock)."""
+    out = []
+    while len(out) < n:
+        q = m._moved(m.q0, rng.normal(size=m.nv) * 0.5, 1.0)
+        if any(typ == "RigidBodyRxyz" and abs(np.cos(q[idx[4]])) < 0.3 for typ, idx, _ in m.kinds):
+            continue
+        out.append((q, rng.normal(size=m.nv) * 3.0, float(rng.uniform(0, 1))))
+    return out
+
+
+def residual_at(m, q, V, t):
+    """Exudyn's full residual vector (ODE2 forces first) at (q, V, t)."""
+    m._write(q, m.rates_from_twist(q, V), t)
+    m.solver.ComputeODE2RHS(m.mbs)
+    return np.array(m.solver.GetSystemResidual())
+
+
+def test_state_writes_and_moved_state(built, rng):
+    SC, m, P = built
+    qpos, qvel = np.zeros(m.n2), np.zeros(m.n2)
+    for q, V, t in states(m, rng):
+        K.write(P.I, P.W, q, V, 0.0, qpos, qvel)
+        assert close(qpos, q - m.ref) and close(qvel, m.rates_from_twist(q, V))
+        assert close(qvel, m.H(q) @ V)
+        assert K.write(P.I, P.W, q, V, 0.0, qpos, qvel) == 0.0
+        for eps in (1e-5, -1e-5, 2.5):
+            h = K.write(P.I, P.W, q, V, eps, qpos, qvel)
+            assert h == eps / max(1.0, np.abs(V).max())
+            qm = m._moved(q, V, h)
+            assert close(P.qm, qm)
+            assert close(qpos, qm - m.ref) and close(qvel, m.rates_from_twist(qm, V))
+
+
+def test_forces_constraint_matrix_and_solve(built, rng):
+    SC, m, P = built
+    nv = m.nv
+    for q, V, t in states(m, rng):
+        Mb, Qb, A, gam = m._evaluate(q, V, t)
+        H = m.H(q)
+        R = residual_at(m, q, V, t)
+        Q = R[:m.n2]
+        # the general case: Q̄ = Hᵀ(Q - M Ḣ V), M̄ = Hᵀ M H
+        m.solver.ComputeMassMatrix(m.mbs)
+        M = np.array(m.solver.GetSystemMassMatrix())
+        Qg, Mg = np.zeros(nv), np.zeros((nv, nv))
+        K.forces(P.I, P.W, q, V, R, M, Qg, Mg)
+        assert close(Qg, H.T @ (Q - M @ m.Hdot_V(q, V))) and close(Mg, H.T @ M @ H)
+        Qbar = np.zeros(nv)
+        if P.constant_mass:
+            K.forces(P.I, P.W, q, V, R, P.empty, Qbar, P.empty)
+            assert close(Qbar, Qb)
+        else:
+            assert close(Qg, Qb) and close(Mg, Mb)
+        Vd = np.zeros(nv)
+        Mpass = P.empty if P.constant_mass else Mb
+
+        def solve(A_, g_):
+            return K.solve(P.I, P.W, Mpass, A_, Qb, g_, Vd)
+        if A is None:
+            assert solve(np.zeros((0, nv)), np.zeros(0)) == 0
+            assert close(Vd, np.linalg.solve(Mb, Qb))
+            continue
+        # A from the AE rows alone and from Exudyn's whole system Jacobian
+        m.sd.SetODE2Coordinates(q - m.ref)
+        C = np.ascontiguousarray(m._Cq())
+        A1, A2 = np.zeros(A.shape), np.zeros(A.shape)
+        K.constraint_matrix(P.I, P.W, q, C, np.arange(len(C), dtype=np.int64), A1)
+        S = m.solver
+        S.SetSystemJacobian(m._jac_zero)
+        S.ComputeJacobianAE(m.mbs, 1.0, 1.0 if len(m.velocity_rows) else 0.0, 0.0, False)
+        K.constraint_matrix(P.I, P.W, q, S.GetSystemJacobian(), P.rows, A2)
+        assert close(A1, A) and close(A2, A) and close(A1, C @ H)
+        assert solve(A, gam) == 0
+        assert close(Vd, solve_kkt(Mb, A, Qb, -gam)[0])
+        assert close(A @ Vd, -gam, tol=1e-10)
+
+
+def test_gamma_difference(rng):
+    rp, rm = rng.normal(size=12), rng.normal(size=12)
+    rows = np.array([9, 3, 4], np.int64)
+    gam = np.zeros(3)
+    K.gamma_fd(rp, rm, rows, 1e-5, gam)
+    assert close(gam, (rp[rows] - rm[rows]) / (2 * 1e-5))
+
+
+def test_f_compiled_equals_f_and_leaves_the_evaluated_state(built, rng):
+    SC, m, P = built
+    tol = 1e-13 if not m.n_constraints else 1e-9     # γ: finite differences over 2e-5
+    for q, V, t in states(m, rng):
+        ref = m.f(q, V, t)
+        n = m.n_eval
+        mine = K.f_compiled(m, P, q, V, t)
+        assert m.n_eval == n + 1
+        assert close(mine, ref, tol)
+        assert close(m.sd.GetODE2Coordinates(), q - m.ref)
+        assert close(m.sd.GetODE2Coordinates_t(), m.rates_from_twist(q, V))
+        assert m.sd.GetTime() == t
+
+
+SPECIAL = {"driven cart, ∂g/∂t from Exudyn": ("driven_cart_pendulum", {}),
+           "driven cart, ∂g/∂t by the bridge": ("driven_cart_pendulum", {"with_t": False}),
+           "moving frame": ("moving_frame_pendulum", {}),
+           "rolling coin (velocity-level rows)": ("rolling_coin", {}),
+           "ANCF cable": ("ancf_cable2d", {}),
+           "kinematic tree (configuration-dependent M̄)": ("kinematic_tree_pendulum", {})}
+
+
+@pytest.mark.parametrize("case", list(SPECIAL))
+def test_f_compiled_on_special_models(case, rng):
+    """Time-dependent and velocity-level constraints, 2-D and flexible coordinates."""
+    import warnings
+
+    import exudyn_special_models as sm
+    name, kw = SPECIAL[case]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mbs = getattr(sm, name)(**kw)[0]
+        m = ExudynModel(mbs)
+    P = K.pack(m)
+    for q, V, t in states(m, rng, 2):
+        V = V * 0.2
+        assert close(K.f_compiled(m, P, q, V, t), m.f(q, V, t), 1e-9)
+
+
+@pytest.mark.parametrize("dense", [False, True], ids=["constant M̄", "dense M̄"])
+def test_redundant_rows_fall_back_to_the_minimum_norm_solve(dense, rng):
+    SC, mbs = offset_com_pendulum() if dense else em.heavy_top(em.EP)[:2]
+    m = ExudynModel(mbs)
+    P = K.pack(m, nc_max=5)
+    q, V, t = states(m, rng, 1)[0]
+    Mb, Qb, A, gam = m._evaluate(q, V, t)
+    A2 = np.ascontiguousarray(np.vstack([A, A[:2]]))     # rows 3, 4 repeat rows 0, 1
+    g2 = np.concatenate([gam, gam[:2]])
+    Vd = np.zeros(m.nv)
+    flag = K.solve(P.I, P.W, Mb if dense else P.empty, A2, Qb, g2, Vd)
+    assert flag == 1
+    K.solve_fallback(P, 5, Vd)
+    assert close(Vd, solve_kkt(Mb, A2, Qb, -g2)[0])
+    assert close(Vd, solve_kkt(Mb, A, Qb, -gam)[0], 1e-10)
+
+
+def test_bad_arguments_raise():
+    SC, mbs = em.heavy_top(em.EP)[:2]
+    m = ExudynModel(mbs)
+    P = K.pack(m)
+    q, V, nv, z = m.q0.copy(), m.V0.copy(), m.nv, np.zeros(m.n2)
+    with pytest.raises(ValueError):
+        K.write(P.I, P.W, q[:-1], V, 0.0, z, z.copy())
+    with pytest.raises(ValueError):                         # more rows than packed
+        K.solve(P.I, P.W, P.empty, np.zeros((4, nv)), np.zeros(nv), np.zeros(4), np.zeros(nv))
+    with pytest.raises(ValueError):                         # constant M̄ packed: no room for a dense factor
+        K.solve(P.I, P.W, np.eye(nv), P.A0, np.zeros(nv), P.gam0, np.zeros(nv))
+    Pd = K.pack(ExudynModel(offset_com_pendulum()[1]))
+    with pytest.raises(ValueError):                         # no constant M̄ packed
+        K.solve(Pd.I, Pd.W, Pd.empty, Pd.A0, np.zeros(nv), Pd.gam0, np.zeros(nv))
+    with pytest.raises(ValueError):
+        K.forces(Pd.I, Pd.W, q, V, np.zeros(m.n2), Pd.empty, np.zeros(nv), Pd.empty)
+    if not numba.config.DISABLE_JIT:
+        with pytest.raises(TypeError):                      # explicit signatures: no new specializations
+            K.write(P.I, P.W, q.astype(np.float32), V, 0.0, z, z.copy())
+
+
+def test_interpreted_kernels_give_the_same_f():
+    """NUMBA_DISABLE_JIT=1 runs the same source as plain Python."""
+    code = (
+        "import sys, numpy as np\n"
+        "sys.path[:0] = ['tests', 'adapters']\n"
+        "import exudyn_models as em\n"
+        "from lgt_exudyn.model import ExudynModel\n"
+        "from lgt_exudyn import kernels as K\n"
+        "for make in (lambda: em.mixed_with_point_mass(em.RXYZ), lambda: em.heavy_top(em.EP)[:2]):\n"
+        "    m = ExudynModel(make()[1]); P = K.pack(m)\n"
+        "    q = m._moved(m.q0, np.linspace(-0.3, 0.4, m.nv), 1.0); V = np.linspace(1, -2, m.nv)\n"
+        "    a, b = K.f_compiled(m, P, q, V, 0.2), m.f(q, V, 0.2)\n"
+        "    print(np.abs(a - b).max() / np.abs(b).max())\n")
+    import os
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = run_python(f"import os; os.chdir({root!r})\n" + code, NUMBA_DISABLE_JIT="1")
+    errs = [float(x) for x in out.split()]
+    assert len(errs) == 2 and max(errs) < 1e-9
