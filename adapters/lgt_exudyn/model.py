@@ -46,6 +46,8 @@ def _engine_call(method):
         except LGTError:
             raise
         except Exception as exc:
+            if not type(exc).__module__.startswith("exudyn"):
+                raise                                 # not Exudyn's: a bug, keep its traceback
             text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
             lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
             what = " ".join(lines) if lines else type(exc).__name__
@@ -69,6 +71,7 @@ class ExudynModel(Model):
         from lgt_bridge import backend as _backend
         self._compiled = _backend.compiled(backend)
         self._P = None                  # the kernels' pack (built at the first f)
+        self._Mbar_inv = None
         exu = _exudyn()
         self.exu, self.mbs = exu, mbs
         if not getattr(mbs, "systemIsConsistent", False):
@@ -591,11 +594,8 @@ class ExudynModel(Model):
     @_engine_call
     def f(self, q, V, t):
         if self._compiled:
-            if self._P is None:
-                from . import kernels
-                self._kernels = kernels
-                self._P = kernels.pack(self)
-            return self._kernels.f_compiled(self, self._P, np.ascontiguousarray(q, float),
+            P = self._pack()
+            return self._kernels.f_compiled(self, P, np.ascontiguousarray(q, float),
                                             np.ascontiguousarray(V, float), float(t))
         M, Q, A, gam = self._evaluate(q, V, t)
         if A is None:
@@ -641,7 +641,31 @@ class ExudynModel(Model):
         if not self.n_constraints:
             return np.zeros((0, self.nv))
         self.sd.SetODE2Coordinates(q - self.ref)
+        if self._compiled:
+            P = self._pack()
+            S = self.solver
+            S.SetSystemJacobian(self._jac_zero)
+            S.ComputeJacobianAE(self.mbs, 1.0, 1.0 if len(self.velocity_rows) else 0.0, 0.0, False)
+            A = np.empty((self.n_constraints, self.nv))
+            self._kernels.constraint_matrix(P.I, P.W, np.ascontiguousarray(q, float), S.GetSystemJacobian(),
+                                            P.rows, A)
+            return A
         return self._Cq() @ self.H(q)
+
+    def solve_mass(self, q, B):
+        """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""
+        if self._Mbar is None:
+            return np.linalg.solve(self.mass_matrix(q), B)
+        if self._Mbar_inv is None:
+            self._Mbar_inv = np.linalg.inv(self._Mbar)
+        return self._Mbar_inv @ B
+
+    def _pack(self):
+        if self._P is None:
+            from . import kernels
+            self._kernels = kernels
+            self._P = kernels.pack(self)
+        return self._P
 
     @_engine_call
     def constraint_gamma(self, q, V, t=None):
