@@ -481,8 +481,10 @@ CASES = [
     Case("kinematic_tree_pendulum", kinematic_tree_pendulum, cls=5, ref_solver=RK67, ref_steps=50, ref_order=6),
     Case("ancf_cable2d", ancf_cable2d, cls=5, ga_steps=200),
     Case("rigid2d_double_pendulum", rigid2d_double_pendulum, cls=5, ga_steps=300),
-    Case("ode1_controller", ode1_controller, cls=6, ref_solver=RK67, ref_steps=50, ref_order=6,
-         bounds={"genalpha": 1.5e-2}),
+    # the bridge carries y as the rate of a vector-space pair, so genalpha treats it with its
+    # second-order update: measured 1.6e-5 at h = 1e-3 (Exudyn's own GA, first order on ODE1
+    # coupling: 6.8e-3); the bound keeps the default 2e-3
+    Case("ode1_controller", ode1_controller, cls=6, ref_solver=RK67, ref_steps=50, ref_order=6),
     Case("sphere_contact", sphere_contact, cls=7, ref_steps=4000, ref_order=0, ga_steps=400,
          bounds={"dopri5": 1e-5, "dop853": 1e-5}),
 ]

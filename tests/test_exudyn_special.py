@@ -39,10 +39,8 @@ import exudyn_special_models as sm  # noqa: E402
 
 METHODS = {"dopri5": dict(rtol=1e-10, atol=1e-10), "dop853": dict(rtol=1e-10, atol=1e-10), "genalpha": {}}
 DEFAULT_BOUNDS = {"dopri5": 1e-7, "dop853": 1e-7, "genalpha": 2e-3}
-SMOOTH = [c for c in sm.CASES if c.cls not in (6, 7)]
+SMOOTH = [c for c in sm.CASES if c.cls != 7]
 CONTACT = [c for c in sm.CASES if c.cls == 7]
-#: ODE1 states are not integrated yet (issue 11, item 6): the adapter refuses them by name
-ODE1 = [c for c in sm.CASES if c.cls == 6]
 
 
 def bound(case, method):
@@ -91,15 +89,6 @@ def test_contact_runs_or_refuses_by_name(case, method):
         return
     err, where = sm.discrepancy(sm.state_blocks(mbs, case.compare_nodes), sm.exudyn_reference(case).blocks)
     assert err <= bound(case, method), f"{case.name}/{method}: {err:.3g} at {where}"
-
-
-@pytest.mark.parametrize("case", ODE1, ids=lambda c: c.name)
-def test_ode1_states_are_refused_by_name(case):
-    """Until first-order states run alongside (X, W), a model with them gets an InputError
-    naming the object that owns them and what to do, before any step."""
-    mbs, _ = case.build()
-    with pytest.raises(InputError, match=r"ODE1 coordinates .*object \d+ .*GenericODE1.*exu\.SolveDynamic"):
-        lgt_exudyn.ExudynModel(mbs)
 
 
 def test_genalpha_applies_prestep_changes_at_exudyns_steps():

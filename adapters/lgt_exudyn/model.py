@@ -67,6 +67,14 @@ class ExudynModel(Model):
     methods below); default $LGT_BRIDGE_BACKEND, else numba. Build the model again after
     ``mbs.Assemble()``: the compiled path writes through views of Exudyn's state."""
 
+    _ODE1 = False
+
+    def __new__(cls, mbs=None, *args, **kwargs):
+        # a system with ODE1 coordinates gets the subclass that integrates them alongside
+        if cls is ExudynModel and getattr(mbs, "systemIsConsistent", False) and mbs.systemData.ODE1Size():
+            cls = ExudynModelODE1
+        return super().__new__(cls)
+
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend
         self._compiled = _backend.compiled(backend)
@@ -79,7 +87,7 @@ class ExudynModel(Model):
                              "call mbs.Assemble() before wrapping it.")
         sd = self.sd = mbs.systemData
         self.n2, n1, self.nae = sd.ODE2Size(), sd.ODE1Size(), sd.AEsize()
-        if n1:
+        if n1 and not self._ODE1:
             raise InputError(
                 f"Exudyn system has {n1} ODE1 coordinates (first-order states) in "
                 f"{_items_with(mbs, sd.GetObjectLTGODE1)}: lgt_bridge integrates second-order (ODE2) "
@@ -285,6 +293,9 @@ class ExudynModel(Model):
         self._Mbar = None
         S, mbs = self.solver, self.mbs
         Ms = []
+        if not self.nv:                  # no ODE2 coordinates (a purely first-order system)
+            self._Mbar = np.zeros((0, 0))
+            return
         for k in range(3):
             q = self.q0 if k == 0 else self._moved(self.q0, rng.normal(size=self.nv), 0.7)
             self.sd.SetODE2Coordinates(q - self.ref)
@@ -399,46 +410,51 @@ class ExudynModel(Model):
         if not self.n_constraints:
             return q0, V0, None
         rows = np.array(sorted(self.ep_ae) + [int(self.ae_keep[k]) for k in self.position_rows], int)
-        z = np.zeros(self.n2)
-        g = self._ae_residual_rows(q0, t0, rows)
-        if len(g) and np.abs(g).max() > tol:
-            q, D = q0, np.zeros(self.n2)
-            nae = len(rows)
-            for _ in range(max_iter):
-                self._write(q, z, t0)
-                self.solver.ComputeMassMatrix(self.mbs)
-                M = np.array(self.solver.GetSystemMassMatrix())
-                C = self._ae_jacobian(1.0, 0.0)[0][rows]
-                K = np.block([[M, C.T], [C, np.zeros((nae, nae))]])
-                rhs = np.concatenate([np.zeros(self.n2), C @ D - g])
-                D_new = np.linalg.lstsq(K, rhs, rcond=1e-13)[0][:self.n2]
-                step = np.abs(D_new - D).max()
-                D = D_new
-                q = self._plus(q0, D)
-                g = self._ae_residual_rows(q, t0, rows)
-                if np.abs(g).max() <= tol and step <= 1e-12 * (1.0 + np.abs(D).max()):
-                    break
-            else:
-                raise InputError(f"Exudyn model: the initial positions violate the constraints by "
-                                 f"{np.abs(self._ae_residual_rows(q0, t0, rows)).max():.3g} and could not be "
-                                 f"moved onto them ({max_iter} iterations left {np.abs(g).max():.3g}); "
-                                 "start the model closer to a consistent configuration.")
-        else:
-            q = q0
-        q1, V1, rep = generic(self, q, V0, t0)            # velocities (positions already hold)
+        n2 = self.n2
+        q2 = self._project_positions(q0[:n2], t0, rows, tol, max_iter)
+        q = q0 if q2 is None else np.concatenate([q2, q0[n2:]])
+        q1, V1, rep = generic(self, q, V0, t0)             # velocities (positions already hold)
         if q is q0 and rep is None:
             return q0, V0, None
-        g0 = self._ae_residual_rows(q0, t0, rows)
+        g0 = self._ae_residual_rows(q0[:n2], t0, rows)
         b = self.velocity_rhs(q0, t0)
-        A0 = self.constraint_jacobian(q0)
-        rv = A0 @ V0 - (0.0 if b is None else b)
-        self._write(q1, self.rates_from_twist(q1, V1), t0)
+        rv = self.constraint_jacobian(q0) @ V0 - (0.0 if b is None else b)
+        after = float(np.abs(self._ae_residual_rows(q1[:n2], t0, rows)).max()) if len(rows) else 0.0
+        self.write_back(q1, V1, t0)
         return q1, V1, dict(
             position_residual=float(np.abs(g0).max()) if len(g0) else 0.0,
             velocity_residual=float(np.abs(rv).max()) if len(rv) else 0.0,
             position=float(np.abs(q1 - q0).max()), velocity=float(np.abs(V1 - V0).max()),
-            position_residual_after=float(np.abs(self._ae_residual_rows(q1, t0, rows)).max()) if len(rows) else 0.0,
+            position_residual_after=after,
             velocity_residual_after=(rep or {}).get("velocity_residual_after", 0.0))
+
+    def _project_positions(self, q0, t0, rows, tol, max_iter):
+        """Exudyn's first-step rule for positions (see :meth:`project_initial`); None when
+        q0 already satisfies the constraints."""
+        z = np.zeros(self.n2)
+        g = self._ae_residual_rows(q0, t0, rows)
+        if not len(g) or np.abs(g).max() <= tol:
+            return None
+        q, D = q0, np.zeros(self.n2)
+        nae = len(rows)
+        for _ in range(max_iter):
+            self._write(q, z, t0)
+            self.solver.ComputeMassMatrix(self.mbs)
+            M = np.array(self.solver.GetSystemMassMatrix())
+            C = self._ae_jacobian(1.0, 0.0)[0][rows]
+            K = np.block([[M, C.T], [C, np.zeros((nae, nae))]])
+            rhs = np.concatenate([np.zeros(self.n2), C @ D - g])
+            D_new = np.linalg.lstsq(K, rhs, rcond=1e-13)[0][:self.n2]
+            step = np.abs(D_new - D).max()
+            D = D_new
+            q = self._plus(q0, D)
+            g = self._ae_residual_rows(q, t0, rows)
+            if np.abs(g).max() <= tol and step <= 1e-12 * (1.0 + np.abs(D).max()):
+                return q
+        raise InputError(f"Exudyn model: the initial positions violate the constraints by "
+                         f"{np.abs(self._ae_residual_rows(q0, t0, rows)).max():.3g} and could not be "
+                         f"moved onto them ({max_iter} iterations left {np.abs(g).max():.3g}); "
+                         "start the model closer to a consistent configuration.")
 
     def _ae_residual_rows(self, q, t, rows):
         self._write(q, np.zeros(self.n2), t)
@@ -593,6 +609,9 @@ class ExudynModel(Model):
     # ------------------------------------------------------------------ model protocol
     @_engine_call
     def f(self, q, V, t):
+        if not self.nv:
+            self._write(q, np.zeros(0), t)
+            return np.zeros(0)
         if self._compiled:
             P = self._pack()
             return self._kernels.f_compiled(self, P, np.ascontiguousarray(q, float),
@@ -655,7 +674,7 @@ class ExudynModel(Model):
     def solve_mass(self, q, B):
         """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""
         if self._Mbar is None:
-            return np.linalg.solve(self.mass_matrix(q), B)
+            return np.linalg.solve(ExudynModel.mass_matrix.__wrapped__(self, q), B)
         if self._Mbar_inv is None:
             self._Mbar_inv = np.linalg.inv(self._Mbar)
         return self._Mbar_inv @ B
@@ -716,3 +735,120 @@ def _items_with(mbs, ltg):
             o = mbs.GetObject(k)
             names.append(f"object {k} {o.get('name', '')!r} ({o.get('objectType', '?')})")
     return ", ".join(names[:6]) + (", ..." if len(names) > 6 else "") if names else "its nodes"
+
+
+class ExudynModelODE1(ExudynModel):
+    """An Exudyn system with ODE1 coordinates y (first-order states: controllers, filters,
+    hydraulics), ẏ = Exudyn's ODE1 right-hand side. Each y_i is carried as the *rate* of a
+    vector-space pair: V gets the n1 entries y (V̇_y = ẏ) and q gets n1 entries that hold
+    ∫y dt, which nothing reads; so every method integrates y with the rest of the state
+    (generalized-α as its trapezoidal-like update of a rate). The ODE2 part is
+    :class:`ExudynModel`'s, with y written into Exudyn before each evaluation (ODE2 forces
+    may depend on it)."""
+
+    _ODE1 = True
+
+    def __init__(self, mbs, simulationSettings=None, backend=None):
+        super().__init__(mbs, simulationSettings, backend)
+        sd, exu = self.sd, self.exu
+        self.n1 = sd.ODE1Size()
+        self.ref1 = np.zeros(self.n1)        # Exudyn's system vector of ODE1 references is empty
+        for i in range(sd.NumberOfNodes()):
+            try:
+                idx = list(sd.GetNodeLTGODE1(i))
+            except Exception:                  # nodes without ODE1 coordinates
+                continue
+            if idx:
+                self.ref1[idx] = np.ravel(self.mbs.GetNode(i).get("referenceCoordinates", np.zeros(len(idx))))
+        y0 = np.array(sd.GetODE1Coordinates()) + self.ref1
+        lay = self.layout2 = self.layout
+        n2, nv, n1 = lay.nq, lay.nv, self.n1
+        self.layout = Layout(n2 + n1, nv + n1, lay.bodies, lay.vector_q + tuple(range(n2, n2 + n1)),
+                             lay.vector_v + tuple(range(nv, nv + n1)))
+        self.q0 = np.concatenate([self.q0, np.zeros(n1)])
+        self.V0 = np.concatenate([self.V0, y0])
+        if not np.isfinite(y0).all():
+            raise InputError("Exudyn initial ODE1 coordinates are not finite; fix the ODE1 nodes' "
+                             "initialCoordinates.")
+
+    def _split(self, q, V=None):
+        n2, nv = self.n2, self.nv
+        return (q[:n2], None if V is None else V[:nv], None if V is None else V[nv:])
+
+    def _set_y(self, y):
+        self.sd.SetODE1Coordinates(np.asarray(y, float) - self.ref1)
+
+    def _ydot(self):
+        self.solver.ComputeODE1RHS(self.mbs)
+        return np.array(self.solver.GetSystemResidual())[self.n2:self.n2 + self.n1]
+
+    @_engine_call
+    def f(self, q, V, t):
+        q2, V2, y = self._split(q, V)
+        self._set_y(y)
+        Vd = ExudynModel.f.__wrapped__(self, q2, V2, t)       # leaves (q, q̇, t) written
+        return np.concatenate([Vd, self._ydot()])
+
+    @_engine_call
+    def forces(self, q, V, t):
+        q2, V2, y = self._split(q, V)
+        self._set_y(y)
+        Q = ExudynModel.forces.__wrapped__(self, q2, V2, t)
+        self._write(q2, self.rates_from_twist(q2, V2), t)
+        return np.concatenate([Q, self._ydot()])
+
+    @_engine_call
+    def mass_matrix(self, q):
+        M = ExudynModel.mass_matrix.__wrapped__(self, q[:self.n2])
+        out = np.eye(self.nv + self.n1)
+        out[:self.nv, :self.nv] = M
+        return out
+
+    def solve_mass(self, q, B):
+        B = np.asarray(B, float)
+        out = B.copy()
+        out[:self.nv] = ExudynModel.solve_mass(self, q[:self.n2], B[:self.nv])
+        return out
+
+    def constraints(self, q):
+        return ExudynModel.constraints(self, q[:self.n2])
+
+    @_engine_call
+    def constraints_at(self, q, t):
+        return ExudynModel.constraints_at.__wrapped__(self, q[:self.n2], t)
+
+    @_engine_call
+    def velocity_rhs(self, q, t):
+        return ExudynModel.velocity_rhs.__wrapped__(self, q[:self.n2], t)
+
+    @_engine_call
+    def constraint_jacobian(self, q):
+        A = ExudynModel.constraint_jacobian.__wrapped__(self, q[:self.n2])
+        return np.hstack([A, np.zeros((A.shape[0], self.n1))])
+
+    @_engine_call
+    def constraint_gamma(self, q, V, t=None):
+        q2, V2, y = self._split(q, V)
+        return ExudynModel.constraint_gamma.__wrapped__(self, q2, V2, t)
+
+    @_engine_call
+    def accelerations(self, q, V, t):
+        """Exudyn's ODE2 accelerations (the ODE1 rates are not part of them)."""
+        q2, V2, y = self._split(q, V)
+        Vd = self.f(q, V, t)[:self.nv]
+        return self.H(q2) @ Vd + self.Hdot_V(q2, V2)
+
+    def write_back(self, q, V, t):
+        q2, V2, y = self._split(q, V)
+        ExudynModel.write_back(self, q2, V2, t)
+        self._set_y(y)
+
+    def check_mass_matrix(self, q):
+        """The ODE2 part's mass matrix (the ODE1 block is the identity)."""
+        from lgt_bridge.simulate import mass_defects, mass_message
+        q2 = q[:self.n2]
+        M = ExudynModel.mass_matrix.__wrapped__(self, q2)
+        A = ExudynModel.constraint_jacobian.__wrapped__(self, q2) if self.n_constraints else None
+        d = mass_defects(M, A)
+        if d:
+            raise InputError(mass_message(d, [self.layout2.owner("V", i) for i, _ in d]))
