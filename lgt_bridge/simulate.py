@@ -257,6 +257,9 @@ class Driver:
     has one, else :func:`.integrators.constraints.project_initial`);
     ``initial_projection`` says how far (None: it was consistent)."""
 
+    #: redos of one short step when the model's discontinuous states keep changing
+    MAX_DISCONTINUOUS = 5
+
     def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None,
                  consistent=True):
         self.model, self.stepper = model, stepper
@@ -264,6 +267,9 @@ class Driver:
         self.t_end = t_end
         self.dense = bool(getattr(stepper, "dense_capable", False)) and t_end is not None
         self.n_steps = 0
+        self.n_redone = 0
+        span = (t_end - self.t) if t_end is not None else (dt or 1.0) * 1e2
+        self.h_event = 1e-7 * max(span, 1e-300)     # switches of discontinuous states located to this
         self.initial_projection = None
         if consistent and model.n_constraints:
             own = getattr(model, "project_initial", None)     # an engine's own rule, if it has one
@@ -282,8 +288,12 @@ class Driver:
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
+        post = getattr(self.model, "post_step", None)
         try:
-            accepted, h_new = st.attempt(self.t, h_try)
+            if post is None:
+                accepted, h_new = st.attempt(self.t, h_try)
+            else:
+                accepted, h_new = self._attempt_discontinuous(h_try, post)
         except ModelError as exc:           # the engine raised: end the run, keep the steps
             raise StepFailed(str(exc), error=ModelError) from exc
         if accepted:
@@ -300,6 +310,27 @@ class Driver:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):
                 raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+
+    def _attempt_discontinuous(self, h, post):
+        """A step of a model with discontinuous states (contact, friction: the model's
+        ``post_step(q, V, t)`` updates them from the step's end state and says whether they
+        changed). A step over which they change is declined and retried at a quarter of its
+        length, from its start and with the states of its start, until it is no longer than
+        ``h_event``; that short step is then redone with the new states (as Exudyn's
+        discontinuous iteration redoes its Newton step), up to MAX_DISCONTINUOUS times."""
+        st, m = self.stepper, self.model
+        snap, d0 = st.snapshot(), m.discontinuous_state()
+        accepted, h_new = st.attempt(self.t, h)
+        for _ in range(self.MAX_DISCONTINUOUS):
+            if not accepted or not post(st.q, st.V, self.t + h):
+                break
+            st.restore(snap)
+            if h > self.h_event:
+                m.set_discontinuous_state(d0)
+                return False, 0.25 * h
+            self.n_redone += 1
+            accepted, h_new = st.attempt(self.t, h)
+        return accepted, h_new
 
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated

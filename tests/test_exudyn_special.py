@@ -32,7 +32,6 @@ import pytest
 
 exu = pytest.importorskip("exudyn")
 
-from lgt_bridge.errors import InputError  # noqa: E402
 import lgt_exudyn  # noqa: E402
 
 import exudyn_special_models as sm  # noqa: E402
@@ -77,16 +76,14 @@ def test_bridge_matches_exudyn(case, method):
 
 @pytest.mark.parametrize("method", list(METHODS))
 @pytest.mark.parametrize("case", CONTACT, ids=lambda c: c.name)
-def test_contact_runs_or_refuses_by_name(case, method):
-    """Data coordinates (contact): either the bridge runs and matches Exudyn, or it raises
-    an lgt_bridge InputError naming the contact object; nothing else (no numpy or
-    Exudyn exception, no silent wrong answer)."""
-    try:
-        mbs = run_bridge(case, method)
-    except InputError as exc:
-        msg = str(exc)
-        assert "ballContact" in msg or "ContactSphereSphere" in msg, msg
-        return
+def test_contact_runs_and_matches_exudyn(case, method):
+    """Data coordinates (contact): Exudyn's discontinuous iteration (PostNewton) runs at the
+    end of every step; a step over which the contact state changes is retried shorter
+    until the switch is located, then redone with the new state. Measured against the
+    converged generalized-alpha (agreement 1.5e-7): dopri5 4e-7, dop853 9.8e-6 (both at
+    rtol 1e-10: the penalty force has a kink at contact, which the error control
+    resolves), genalpha 1.2e-4 at h = 5e-4."""
+    mbs = run_bridge(case, method)
     err, where = sm.discrepancy(sm.state_blocks(mbs, case.compare_nodes), sm.exudyn_reference(case).blocks)
     assert err <= bound(case, method), f"{case.name}/{method}: {err:.3g} at {where}"
 

@@ -93,12 +93,6 @@ class ExudynModel(Model):
                 f"{_items_with(mbs, sd.GetObjectLTGODE1)}: lgt_bridge integrates second-order (ODE2) "
                 "systems only and cannot integrate first-order states alongside yet. Run this model "
                 "with Exudyn's own exu.SolveDynamic (e.g. the default generalized-alpha solver).")
-        if sd.DataSize():
-            raise InputError(
-                f"Exudyn system has {sd.DataSize()} data coordinates (contact or friction states) in "
-                f"{_items_with(mbs, sd.GetObjectLTGData)}: they switch between steps in Exudyn's "
-                "discontinuous iteration, which lgt_bridge does not run. Run this model with Exudyn's "
-                "own exu.SolveDynamic.")
         bodies, vq, ep_ae = [], [], []
         self.kinds = []
         iv = 0
@@ -157,6 +151,10 @@ class ExudynModel(Model):
                              "finite; fix the node's initial velocities.")
         self._so3xr3 = {}
         self.n_eval = 0
+        if sd.DataSize():
+            # contact/friction states: Exudyn's own discontinuous iteration after each step
+            self.post_step = self._post_newton
+            self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
         self._detect_constant_mass()
 
     def _check_euler_parameters(self, b):
@@ -177,9 +175,22 @@ class ExudynModel(Model):
             "(or initialRotationMatrix of CreateRigidBody) and leave the initial rotation "
             "coordinates at zero, or make the sum unit.")
 
+    def _post_newton(self, q, V, t):
+        """Exudyn's discontinuous iteration at the end of a step (its PostNewton: contact and
+        friction states updated from the state (q, V, t)); True when they changed by more
+        than timeIntegration.discontinuous.iterationTolerance."""
+        self.write_back(q, V, t)
+        return float(self.solver.PostNewton(self.mbs, self._eval_settings)) > self._disc_tol
+
+    def discontinuous_state(self):
+        return np.array(self.sd.GetDataCoordinates())
+
+    def set_discontinuous_state(self, d):
+        self.sd.SetDataCoordinates(d)
+
     def _init_solver(self):
         """The evaluator: its own solver object, writing no files and no sensors."""
-        s = self.exu.SimulationSettings()
+        s = self._eval_settings = self.exu.SimulationSettings()
         s.solution.file.write = False
         s.solution.sensors.active = False
         s.show.computationTime = False
@@ -750,7 +761,7 @@ class ExudynModelODE1(ExudynModel):
 
     def __init__(self, mbs, simulationSettings=None, backend=None):
         super().__init__(mbs, simulationSettings, backend)
-        sd, exu = self.sd, self.exu
+        sd = self.sd
         self.n1 = sd.ODE1Size()
         self.ref1 = np.zeros(self.n1)        # Exudyn's system vector of ODE1 references is empty
         for i in range(sd.NumberOfNodes()):

@@ -123,6 +123,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     first_step = drv.h
     if controlled:
         drv.h_min = h_min
+        drv.h_event = max(drv.h_event, 4.0 * h_min)     # contact switches: located to ≥ 4 h_min
         drv.why = (f"the error control of {method} at rtol={rtol:g}, atol={atol:g} needs smaller steps there "
                    "(a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
                    "minimumStepSize, or use method='genalpha'.")

@@ -64,6 +64,13 @@ class Stepper:
         self.V = np.array(V, float) if copy else V
         self.W = self.prob.group_velocity(self.V, self.prob.start_quats) if W is None else W
 
+    def snapshot(self):
+        """What :meth:`restore` needs to take the last step again from its start."""
+        return self.q.copy(), self.V.copy()
+
+    def restore(self, snap):
+        self.set_state(*snap)
+
     def check_finite(self, t, q, V):
         if math.isfinite(q.dot(q) + V.dot(V)):       # one reduction; inf/NaN propagate
             return

@@ -106,6 +106,15 @@ class GenAlpha(Stepper):
         self.min_step = 1e-8          # Exudyn's default timeIntegration.minimumStepSize
         self.cut_steps = 0
 
+    def snapshot(self):
+        return (self.q.copy(), self.V.copy(), self.Wd, getattr(self, "a", None),
+                getattr(self, "lam", None), self._prev)
+
+    def restore(self, snap):
+        self.set_state(snap[0], snap[1])
+        self.Wd, self.a, self.lam, self._prev = snap[2:]
+        self._consts = None
+
     def start(self, t0):
         """Initial accelerations from the index-1 solve: Ẇ_0, a_0 = Ẇ_0."""
         prob = self.prob
