@@ -9,6 +9,11 @@ configuration space is a vector space (nq = nv: revolute, prismatic, translation
 are vector-space blocks.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 
+Constraints (RigidConstraintModel, 3-D/6-D, to the world or loop closures): f from
+constraintDynamics, A(q) from Pinocchio's frame Jacobians and γ(q, V) from its frame
+accelerations. Generalized-α's Newton matrix (:meth:`PinocchioModel.iteration_matrix`) comes
+from Pinocchio's analytic RNEA derivatives, mapped to the twist coordinates.
+
 Backends (:mod:`lgt_bridge.backend`, fixed when the model is built): with numba, f converts
 V to Pinocchio's v and ABA's a to V̇ by two compiled calls (:mod:`lgt_pinocchio.kernels`)
 over a preallocated v; with numpy it runs the readable reference (``_f_numpy``).
@@ -69,6 +74,44 @@ def _check_signature(fn, name, expected):
     except TypeError:
         raise InputError(f"{name}: expected a callable {expected}; {getattr(fn, '__name__', name)}"
                          f"{sig} cannot be called with the three arguments (t, q, v).") from None
+
+
+def _hat(x):
+    return np.array([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]])
+
+
+def _cross3(a, b):
+    """a × b for two 3-vectors (np.cross costs tens of µs on one pair)."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
+def _xyzw_matrix(x, y, z, w):
+    """Rotation matrix of the unit quaternion stored x y z w."""
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _djr(e, ed):
+    """(d/dt Jr(e)) ė for the right Jacobian of SO(3)'s exp, Jr(e) = I - a(θ) ẽ + b(θ) ẽ²,
+    a = (1 - cos θ)/θ², b = (θ - sin θ)/θ³ (Ė = E (Jr ė)~ for E = exp(ẽ)):
+    -ȧ e × ė + ḃ e × (e × ė) + b ė × (e × ė), ȧ = (a'/θ)(e·ė), ḃ = (b'/θ)(e·ė)."""
+    th2 = float(e @ e)
+    th = np.sqrt(th2)
+    if th < 0.1:                                   # series: the closed forms cancel
+        b = 1 / 6 - th2 / 120 + th2 * th2 / 5040
+        ap = -1 / 12 + th2 / 180 - th2 * th2 / 6720
+        bp = -1 / 60 + th2 / 1260 - th2 * th2 / 60480
+    else:
+        s, c = np.sin(th), np.cos(th)
+        b = (th - s) / (th2 * th)
+        ap = (th * s - 2 * (1 - c)) / (th2 * th2)
+        bp = (th * (1 - c) - 3 * (th - s)) / (th2 * th2 * th)
+    ee = float(e @ ed)
+    exe = _cross3(e, ed)
+    return -ap * ee * exe + bp * ee * _cross3(e, exe) + b * _cross3(ed, exe)
 
 
 class PinocchioModel(Model):
@@ -267,9 +310,10 @@ class PinocchioModel(Model):
     # --- constraints ------------------------------------------------------------------------------
     def _setup_constraints(self, constraints, fext):
         """RigidConstraintModels (3-D/6-D contacts, loop closures): f from Pinocchio's
-        constraintDynamics; g(q) = placement difference of the two constraint frames in the
-        world (6-D: and the rotation vector between them); A = dg/dV by central differences
-        along each twist direction through τ (used by the projection after each step)."""
+        constraintDynamics; g(q) = position difference of the two constraint frames in the
+        world (6-D: and the rotation vector log(R₂ᵀR₁) between them); A = ∂g/∂V from
+        Pinocchio's frame Jacobians and γ from its frame accelerations
+        (:meth:`constraint_jacobian`, :meth:`constraint_gamma`)."""
         pin = self.pin
         self.cms = pin.StdVec_RigidConstraintModel()
         self.cds = pin.StdVec_RigidConstraintData()
@@ -287,6 +331,14 @@ class PinocchioModel(Model):
         if fext is not None:
             raise InputError("fext together with constraints is not supported (Pinocchio's "
                              "constraintDynamics takes no external forces); express the loads as tau.")
+        # (constraint model, 6-D?, first row); the placements are read from it at each call,
+        # as constraintDynamics reads them
+        self._crows, row = [], 0
+        for cm in self.cms:
+            six = cm.type == pin.ContactType.CONTACT_6D
+            self._crows.append((cm, six, row))
+            row += 6 if six else 3
+        self._cdata = self.model.createData()       # kinematics of g, A, γ (f keeps self.data)
         pin.initConstraintDynamics(self.model, self.data, self.cms, self.cds)
         self.prox = pin.ProximalSettings(1e-12, 1e-12, 50)
         g0 = self.constraints(self.q0)
@@ -296,19 +348,98 @@ class PinocchioModel(Model):
                              "frames do not coincide; set joint2_placement to where joint1's frame is "
                              "at q0 (or start from a configuration that satisfies the constraints).")
 
+    def _frame(self, j, pl):
+        """World placement of the frame ``pl`` on joint j (j = 0: the world) after kinematics."""
+        return pl if j == 0 else self._cdata.oMi[j] * pl
+
+    def _constraint_frames(self):
+        """(joint1, placement1, joint2, placement2, 6-D?, first row) per constraint."""
+        for cm, six, r in self._crows:
+            yield cm.joint1_id, cm.joint1_placement, cm.joint2_id, cm.joint2_placement, six, r
+
     def constraints(self, q):
         if not self.n_constraints:
             return np.zeros(0)
         pin = self.pin
-        pin.forwardKinematics(self.model, self.data, q)
-        out = []
-        for cm in self.cms:
-            M1 = self.data.oMi[cm.joint1_id] * cm.joint1_placement
-            M2 = self.data.oMi[cm.joint2_id] * cm.joint2_placement
-            out.append(M1.translation - M2.translation)
-            if cm.type == pin.ContactType.CONTACT_6D:
-                out.append(pin.log3(M2.rotation.T @ M1.rotation))
-        return np.concatenate(out)
+        pin.forwardKinematics(self.model, self._cdata, np.asarray(q, float))
+        out = np.empty(self.n_constraints)
+        for j1, pl1, j2, pl2, six, r in self._constraint_frames():
+            M1, M2 = self._frame(j1, pl1), self._frame(j2, pl2)
+            out[r:r + 3] = M1.translation - M2.translation
+            if six:
+                out[r + 3:r + 6] = pin.log3(M2.rotation.T @ M1.rotation)
+        return out
+
+    def _times_T(self, G, q):
+        """G T(q) (a new array): Pinocchio-v columns to twist columns, without forming T."""
+        A = np.array(G, float)
+        for iq, iv in self.roots:
+            A[:, iv:iv + 3] = G[:, iv + 3:iv + 6]
+            A[:, iv + 3:iv + 6] = G[:, iv:iv + 3] @ _xyzw_matrix(*q[iq + 3:iq + 7]).T
+        return A
+
+    def constraint_jacobian(self, q):
+        """A(q) = ∂g/∂V (ġ = A V) from Pinocchio's frame Jacobians: with J_i the
+        LOCAL_WORLD_ALIGNED Jacobian of constraint frame i (world linear velocity of its
+        origin, world ω), the position rows are (J₁ - J₂)_lin T and the rotation rows of a
+        6-D constraint, e = log(E), E = R₂ᵀR₁, are Jlog3(E) R₁ᵀ (J₁ - J₂)_ang T (ė =
+        Jr(e)⁻¹ w with Ė = E w~, w = R₁ᵀ(ω₁ - ω₂) in the world), where v = T(q) V."""
+        if not self.n_constraints:
+            return np.zeros((0, self.nv))
+        pin, model, d = self.pin, self.model, self._cdata
+        q = np.asarray(q, float)
+        pin.computeJointJacobians(model, d, q)
+        G = np.zeros((self.n_constraints, self.nv))
+        lwa = pin.LOCAL_WORLD_ALIGNED
+        for j1, pl1, j2, pl2, six, r in self._constraint_frames():
+            J = pin.getFrameJacobian(model, d, j1, pl1, lwa)
+            if j2:
+                J = J - pin.getFrameJacobian(model, d, j2, pl2, lwa)
+            G[r:r + 3] = J[:3]
+            if six:
+                R1 = self._frame(j1, pl1).rotation
+                E = self._frame(j2, pl2).rotation.T @ R1
+                G[r + 3:r + 6] = pin.Jlog3(E) @ (R1.T @ J[3:])
+        return self._times_T(G, q)
+
+    def _frame_motion(self, j, pl):
+        """(R, ω world, classical acceleration of the origin (world), α world) of the frame
+        ``pl`` on joint j after forwardKinematics(q, v, a) on the constraint data."""
+        if j == 0:
+            z = np.zeros(3)
+            return pl.rotation, z, z, z
+        d = self._cdata
+        R = (d.oMi[j] * pl).rotation
+        vf, af = pl.actInv(d.v[j]), pl.actInv(d.a[j])
+        w = vf.angular
+        return R, R @ w, R @ (af.linear + _cross3(w, vf.linear)), R @ af.angular
+
+    def constraint_gamma(self, q, V):
+        """γ(q, V) = (d/dt A) V, so that g̈ = A V̇ + γ: the second derivative of g along the
+        motion with V̇ = 0. In Pinocchio's coordinates V̇ = 0 is the acceleration
+        a₀ = Ṫ V (-ω × v_lin on each free-flyer, zero elsewhere), so γ comes from one
+        forwardKinematics(q, v, a₀) and the frames' classical accelerations: p̈₁ - p̈₂ on the
+        position rows; on the rotation rows of a 6-D constraint
+        ë = Jr(e)⁻¹ (ẇ - (∂Jr(e)[ė]) ė) with ẇ = -ω₁ × w + R₁ᵀ(α₁ - α₂) (world α)."""
+        if not self.n_constraints:
+            return np.zeros(0)
+        pin = self.pin
+        q, V = np.asarray(q, float), np.asarray(V, float)
+        v = self.v_from_twist(q, V)
+        pin.forwardKinematics(self.model, self._cdata, q, v, self._TdV(v))
+        out = np.empty(self.n_constraints)
+        for j1, pl1, j2, pl2, six, r in self._constraint_frames():
+            R1, w1, p1, al1 = self._frame_motion(j1, pl1)
+            R2, w2, p2, al2 = self._frame_motion(j2, pl2)
+            out[r:r + 3] = p1 - p2
+            if six:
+                E = R2.T @ R1
+                Jl = pin.Jlog3(E)
+                w = R1.T @ (w1 - w2)
+                wd = -_cross3(R1.T @ w1, w) + R1.T @ (al1 - al2)
+                ed = Jl @ w
+                out[r + 3:r + 6] = Jl @ (wd - _djr(pin.log3(E), ed))
+        return out
 
     def _moved(self, q, d):
         out = q.copy()
@@ -321,13 +452,23 @@ class PinocchioModel(Model):
         out[vq] = q[vq] + d[list(self.layout.vector_v)]
         return out
 
-    def constraint_jacobian(self, q, eps=1e-6):
+    # finite-difference references of A and γ (tests hold the analytic ones to them)
+    def _constraint_jacobian_fd(self, q, eps=1e-6):
+        """A by central differences of g along each twist direction through τ (SO(3)xR³ exp)."""
         A = np.zeros((self.n_constraints, self.nv))
         for k in range(self.nv):
             e = np.zeros(self.nv)
             e[k] = eps
             A[:, k] = (self.constraints(self._moved(q, e)) - self.constraints(self._moved(q, -e))) / (2 * eps)
         return A
+
+    def _constraint_gamma_fd(self, q, V, eps=2e-3):
+        """γ = d²/ds² g(τ(q, s V)) at s = 0 (V is constant along that curve: ω body and ṙ
+        inertial), by the 7-point central stencil (error O(eps⁶))."""
+        c = np.array([2.0, -27.0, 270.0, -490.0, 270.0, -27.0, 2.0]) / 180.0
+        V = np.asarray(V, float)
+        g = [self.constraints(self._moved(q, s * eps * V)) for s in range(-3, 4)]
+        return sum(ck * gk for ck, gk in zip(c, g)) / eps ** 2
 
     def _T(self, q):
         """v = T(q) V (Pinocchio velocity from the model twist)."""
@@ -358,13 +499,148 @@ class PinocchioModel(Model):
             b = pin.rnea(self.model, self.data, q, v, z)
         else:
             b = pin.rnea(self.model, self.data, q, v, z, self._forces(t, q, v))
-        TdV = np.zeros(self.nv)
-        if len(self.roots):
-            i = self._riv[:, None]
-            TdV[i + np.arange(3)] = -cross(v[i + np.arange(3, 6)], v[i + np.arange(3)])
         M = pin.crba(self.model, self.data, q)
         M = np.triu(M) + np.triu(M, 1).T
-        return self._T(q).T @ (tau - b - M @ TdV)
+        return self._T(q).T @ (tau - b - M @ self._TdV(v))
+
+    def _TdV(self, v):
+        """Ṫ V: Pinocchio's acceleration at V̇ = 0, (-ω × v_lin, 0) on each free-flyer
+        (d/dt of Rᵀṙ at fixed ṙ), zero elsewhere."""
+        TdV = np.zeros(self.nv)
+        for _, iv in self.roots:
+            TdV[iv:iv + 3] = _cross3(v[iv:iv + 3], v[iv + 3:iv + 6])
+        return TdV
+
+    # --- generalized-α: the iteration matrix ------------------------------------------------------
+    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos, lam=None, Vdot=None):
+        """M c_acc + C_t c_vel + K_t c_pos for generalized-α's analytic Newton matrix, in
+        V = (ω body, ṙ inertial) and the SO(3)xR³ increments z = (δθ body, δr inertial):
+        the derivatives of the residual R = M̄ V̇ - Q̄ (+ Aᵀλ) = Tᵀ r(q, v, a) (+ Aᵀλ), with
+        r = rnea(q, v, a) - u(t, q, v) (u: tau and the joint torques of fext), v = T V and
+        a = T V̇ + Ṫ V, from Pinocchio's analytic RNEA derivatives (∂r/∂q in its tangent
+        coordinates, ∂r/∂v, ∂r/∂a = M):
+
+            M̄   = Tᵀ M T
+            C_t = Tᵀ (∂r/∂v T + M ∂a/∂V)
+            K_t = Tᵀ (∂r/∂q T + ∂r/∂v ∂v/∂z + M ∂a/∂z) + (∂Tᵀ/∂z) r + ∂(Aᵀλ)/∂z
+
+        (Pinocchio's tangent increment of a free-flyer is T z to first order; ∂v/∂z, ∂a/∂z,
+        ∂a/∂V and ∂Tᵀ/∂z are nonzero on the free-flyers only: v_lin = Rᵀṙ turns with δθ).
+        ∂u/∂q and ∂u/∂v by forward differences when tau or fext is a callable.
+
+        The derivatives are taken at V̇ = ``Vdot``, by default at the acceleration Newton
+        converges to: ABA's, M̄⁻¹(Q̄ - Aᵀλ) given the constraint forces ``lam``, else
+        constraintDynamics'. With ``lam`` the constraints' geometric stiffness ∂(Aᵀλ)/∂z is
+        included, by central differences of the analytic A. The three matrices are computed
+        once per (q, V, t, lam) and kept for the next calls (generalized-α asks for each)."""
+        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(),
+               None if lam is None or not self.n_constraints else np.asarray(lam, float).tobytes(),
+               None if Vdot is None else np.asarray(Vdot, float).tobytes())
+        cached = getattr(self, "_it_cache", None)
+        if cached is None or cached[0] != key:
+            with np.errstate(over="ignore", invalid="ignore"):   # a diverging iterate: genalpha
+                parts = self._iteration_parts(q, V, t, lam, Vdot)  # checks the matrix is finite
+            cached = self._it_cache = (key, parts)
+        M, C, K = cached[1]
+        out = c_acc * M
+        if c_vel:
+            out = out + c_vel * C
+        if c_pos:
+            out = out + c_pos * K
+        return out
+
+    def _user_force(self, t, q, v):
+        """u(t, q, v): tau plus the joint torques of fext (Jᵀ f = rnea(q, v, 0) - rnea(q, v, 0, fext))."""
+        u = np.array(self._torques(t, q, v), float)
+        if self._fext is not None:
+            pin, d = self.pin, self._it_data
+            z = np.zeros(self.nv)
+            u += pin.rnea(self.model, d, q, v, z) - pin.rnea(self.model, d, q, v, z, self._forces(t, q, v))
+        return u
+
+    def _user_force_derivatives(self, t, q, v, u0):
+        """(∂u/∂q in Pinocchio's tangent coordinates, ∂u/∂v) by forward differences from
+        u0 = u(t, q, v) (2 nv calls of the controller per matrix), or None when u is constant."""
+        if not callable(self._tau) and self._fext is None:
+            return None
+        pin, model, nv = self.pin, self.model, self.nv
+        Dq, Dv = np.empty((nv, nv)), np.empty((nv, nv))
+        e, vp = np.zeros(nv), v.copy()
+        h = 1.5e-8                                   # ≈ √eps: q's tangent is O(1)
+        for k in range(nv):
+            e[k] = h
+            Dq[:, k] = (self._user_force(t, pin.integrate(model, q, e), v) - u0) / h
+            e[k] = 0.0
+            hv = h * max(1.0, abs(v[k]))
+            vp[k] = v[k] + hv
+            Dv[:, k] = (self._user_force(t, q, vp) - u0) / (vp[k] - v[k])
+            vp[k] = v[k]
+        return Dq, Dv
+
+    def _iteration_parts(self, q, V, t, lam=None, Vdot=None):
+        """(M̄, C_t, K_t) of :meth:`iteration_matrix` as dense arrays."""
+        pin, model = self.pin, self.model
+        if getattr(self, "_it_data", None) is None:
+            self._it_data = model.createData()
+        d = self._it_data
+        q = np.array(q, float)
+        V = np.asarray(V, float)
+        v = self.v_from_twist(q, V)
+        T = self._T(q)
+        nc = self.n_constraints
+        u = self._user_force(t, q, v)
+        residual = True                    # r(q, v, a) ≠ 0 at a: (∂Tᵀ/∂z) r is needed
+        if Vdot is not None:
+            a = T @ np.asarray(Vdot, float) + self._TdV(v)
+        elif nc and lam is not None:
+            # Tᵀ r + Aᵀλ = 0 with T orthogonal: r = -T Aᵀλ, a = aba(u - T Aᵀλ)
+            a = np.array(pin.aba(model, d, q, v, u - T @ (self.constraint_jacobian(q).T @ np.asarray(lam, float))))
+        elif nc:
+            a = np.array(pin.constraintDynamics(model, self.data, q, v, self._torques(t, q, v),
+                                                self.cms, self.cds, self.prox))
+        else:
+            a = np.array(pin.aba(model, d, q, v, u))
+            residual = False
+        r = pin.rnea(model, d, q, v, a) - u if residual else None
+        dq, dv, Mp = (np.array(x) for x in pin.computeRNEADerivatives(model, d, q, v, a))
+        Mp = np.triu(Mp) + np.triu(Mp, 1).T
+        du = self._user_force_derivatives(t, q, v, u)
+        if du is not None:
+            dq -= du[0]
+            dv -= du[1]
+        # ∂v/∂z, ∂a/∂z, ∂a/∂V on the free-flyers (rows v_lin; z and V columns (θ | ω, ṙ))
+        Nv, Na, Ea = np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nv))
+        dT = np.zeros((self.nv, self.nv))
+        if len(self.roots):
+            R = _q._to_matrix(self._quats(q))
+            for k, (_, iv) in enumerate(self.roots):
+                lin, ang = slice(iv, iv + 3), slice(iv + 3, iv + 6)
+                vl, w, al = v[lin], v[ang], a[lin]
+                Hv, Hw = _hat(vl), _hat(w)
+                Nv[lin, lin] = Hv
+                Na[lin, lin] = _hat(al + _cross3(w, vl)) - Hw @ Hv        # a_lin = Rᵀr̈ - ω × Rᵀṙ
+                Ea[lin, lin] = Hv
+                Ea[lin, ang] = -Hw @ R[k].T
+                if r is not None:
+                    dT[ang, lin] = -R[k] @ _hat(r[lin])                  # (Tᵀ r)_ṙ = R r_lin
+        Tt = T.T
+        M = Tt @ Mp @ T
+        C = Tt @ (dv @ T + Mp @ Ea)
+        K = Tt @ (dq @ T + dv @ Nv + Mp @ Na) + dT
+        if nc and lam is not None:
+            K += self._geometric_stiffness(q, np.asarray(lam, float))
+        return M, C, K
+
+    def _geometric_stiffness(self, q, lam, eps=1e-6):
+        """∂(A(q)ᵀλ)/∂z by central differences of the analytic A along the increments."""
+        G = np.empty((self.nv, self.nv))
+        e = np.zeros(self.nv)
+        for k in range(self.nv):
+            e[k] = eps
+            G[:, k] = (self.constraint_jacobian(self._moved(q, e)).T @ lam
+                       - self.constraint_jacobian(self._moved(q, -e)).T @ lam) / (2 * eps)
+            e[k] = 0.0
+        return G
 
     # --- model protocol ---------------------------------------------------------------------------
     def f(self, q, V, t):
