@@ -245,6 +245,16 @@ class ExudynModel(Model):
         H[self._vq, self._vv] = 1.0
         return H
 
+    def _H_pinv(self, q):
+        """The pseudo-inverse of H(q), block by block (H is a permutation of per-node
+        blocks: identities and each rotation's 4x3 or 3x3 block)."""
+        Hp = np.zeros((self.nv, self.n2))
+        Hp[self._lin_v, self._pos_q] = 1.0
+        for typ, (rq, wv) in self._types.items():
+            Hp[wv[:, :, None], rq[:, None, :]] = np.linalg.pinv(self._rot_blocks(typ, q[rq]))
+        Hp[self._vv, self._vq] = 1.0
+        return Hp
+
     def rates_from_twist(self, q, V):
         """Exudyn's ODE2 velocity coordinates q̇_e = H(q) V."""
         qd = np.zeros(self.n2)
@@ -301,6 +311,7 @@ class ExudynModel(Model):
         """Cache M̄ when the twist mass matrix is the same at q0 and two other configurations
         and the engine's M equals H⁺ᵀ M̄ H⁺ there (rigid bodies with the node at the centre
         of mass); then Exudyn's mass matrix is never evaluated again."""
+        from scipy.sparse import csr_matrix
         self._Mbar = None
         S, mbs = self.solver, self.mbs
         Ms = []
@@ -312,10 +323,10 @@ class ExudynModel(Model):
             self.sd.SetODE2Coordinates(q - self.ref)
             S.ComputeMassMatrix(mbs)
             M = np.array(S.GetSystemMassMatrix())
-            H = self.H(q)
-            Mb = H.T @ M @ H
-            Hp = np.linalg.pinv(H)
-            if np.abs(M - Hp.T @ Mb @ Hp).max() > 1e-12 * max(1.0, np.abs(M).max()):
+            H, Hp = csr_matrix(self.H(q)), csr_matrix(self._H_pinv(q))    # a few entries per row
+            Mb = np.asarray((H.T @ (H.T @ M).T).T)                         # Hᵀ M H
+            back = np.asarray((Hp.T @ (Hp.T @ Mb).T).T)                    # H⁺ᵀ M̄ H⁺
+            if np.abs(M - back).max() > 1e-12 * max(1.0, np.abs(M).max()):
                 break
             Ms.append(Mb)
         else:
