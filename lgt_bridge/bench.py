@@ -11,8 +11,11 @@ and (with matplotlib) PNG plots. Every option is checked
 (:func:`check_options`) before the reference run; a run that fails (an exception in the
 run or in its worker) becomes a row with ``success = False`` and its error.
 
-A scene is a built-in name (see SCENES) or ``path/to/file.py:function`` where the
-function returns ``(model, t_end)``.
+A scene is a built-in name (see SCENES), ``PREFIX:ARG`` for a family of scenes an adapter
+registers (:class:`SceneFamily`, e.g. ``pinocchio_robot:solo12``), or
+``path/to/file.py:function`` where the function returns ``(model, t_end)``. A scene may
+declare scenarios (variants such as free fall or PD control, ``--scenario NAME``); the
+first is its default, and a scenario given to a scene without any is an error.
 """
 import importlib.util
 import json
@@ -45,6 +48,22 @@ class BenchScene:
     t_end: float
     natives: dict = field(default_factory=dict)
     about: str = ""
+    #: scenario name -> the BenchScene of that variant (``--scenario NAME``), the first the
+    #: default; empty: the scene has no scenarios
+    scenarios: dict = field(default_factory=dict)
+
+
+@dataclass
+class SceneFamily:
+    """Scenes named ``PREFIX:ARG``, registered under PREFIX: ``resolve(arg) -> BenchScene``
+    (raising InputError for an ARG it does not know, cheaply: nothing is built). ``arg``
+    names ARG in the help (e.g. "NAME"); ``scenarios``: scenario name -> one-line
+    description, checked before ``resolve`` is called."""
+
+    resolve: Callable
+    about: str = ""
+    arg: str = "ARG"
+    scenarios: dict = field(default_factory=dict)
 
 
 SCENES = {
@@ -77,17 +96,55 @@ def all_scenes():
     return out
 
 
-def get_scene(spec):
-    """The BenchScene of a name or of 'file.py:function' (which returns (model, t_end))."""
+def get_scene(spec, scenario=None):
+    """The BenchScene of a name, of ``PREFIX:ARG`` (a :class:`SceneFamily`) or of
+    'file.py:function' (which returns (model, t_end)); with ``scenario``, that variant of
+    it (InputError when the scene has no scenarios or not this one; for a family checked
+    before ARG is resolved). Without, a scene with scenarios gives its first (default)."""
+    sc = _base_scene(spec, scenario)
+    _check_scenario(spec, scenario, sc.scenarios)
+    if sc.scenarios:
+        return sc.scenarios[scenario if scenario is not None else next(iter(sc.scenarios))]
+    return sc
+
+
+def scenarios_of(spec):
+    """The scenario names a scene declares (first: the default); () for none."""
+    return tuple(_base_scene(spec).scenarios)
+
+
+def _base_scene(spec, scenario=None):
     scenes = all_scenes()
-    if spec in scenes:
-        return scenes[spec]
-    if ":" in spec:
-        path, fn = spec.rsplit(":", 1)
-        if Path(path).is_file():
-            return BenchScene(lambda: _user_scene(path, fn, spec), None)
-    raise InputError(f"bench: unknown scene {spec!r}; use one of {sorted(scenes)} or "
-                     "'path/to/file.py:function' returning (model, t_end).")
+    sc = scenes.get(spec)
+    if isinstance(sc, SceneFamily):
+        raise InputError(f"bench: {spec!r} is a family of scenes; name one as {spec}:{sc.arg} "
+                         "(lgt-bridge bench --help describes it).")
+    if sc is None and ":" in spec:
+        prefix, arg = spec.split(":", 1)
+        fam = scenes.get(prefix)
+        if isinstance(fam, SceneFamily):
+            _check_scenario(spec, scenario, fam.scenarios)
+            sc = fam.resolve(arg)
+        else:
+            path, fn = spec.rsplit(":", 1)
+            if Path(path).is_file():
+                sc = BenchScene(lambda: _user_scene(path, fn, spec), None)
+    if sc is None:
+        names = [k + (f":{v.arg}" if isinstance(v, SceneFamily) else "") for k, v in sorted(scenes.items())]
+        raise InputError(f"bench: unknown scene {spec!r}; use one of {names} or "
+                         "'path/to/file.py:function' returning (model, t_end).")
+    return sc
+
+
+def _check_scenario(spec, scenario, scenarios):
+    if scenario is None:
+        return
+    if not scenarios:
+        raise InputError(f"bench --scenario {scenario}: scene {spec!r} has no scenarios; leave out "
+                         "--scenario (lgt-bridge bench --help lists the scenes that have them).")
+    if scenario not in scenarios:
+        raise InputError(f"bench --scenario: unknown scenario {scenario!r} for scene {spec!r}; use one of "
+                         f"{', '.join(scenarios)}.")
 
 
 def _user_scene(path, fn, spec):
@@ -102,11 +159,22 @@ def _user_scene(path, fn, spec):
     return out
 
 
-def load_scene(spec):
-    """(model, t_end) from a scene name or 'file.py:function'."""
-    sc = get_scene(spec)
+def load_scene(spec, scenario=None):
+    """(model, t_end) from a scene name or 'file.py:function' (and a scenario of it)."""
+    sc = get_scene(spec, scenario)
     out = sc.make()
     return out if sc.t_end is None else (out, sc.t_end)
+
+
+def report_name(spec, scenario=None):
+    """The stem of a sweep's files: the scene name, the file's stem for 'file.py:function',
+    PREFIX_ARG for a family member; then _SCENARIO when one is given."""
+    name = spec
+    if ":" in spec:
+        prefix, arg = spec.split(":", 1)
+        fam = all_scenes().get(prefix)
+        name = (f"{prefix}_{arg}" if isinstance(fam, SceneFamily) else Path(spec.split(":")[0]).stem)
+    return name + (f"_{scenario}" if scenario else "")
 
 
 def pose_error(model, q, q_ref):
@@ -137,9 +205,9 @@ def pose_errors(model, q, q_ref):
 _SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 
-def check_options(spec, methods, groups, charts, tols, dts):
-    """InputError on the first bad option, before anything runs (the scene is looked up,
-    not built)."""
+def check_options(spec, methods, groups, charts, tols, dts, scenario=None):
+    """InputError on the first bad option, before anything runs (the scene and its
+    scenario are looked up, not built)."""
     if not methods:
         raise InputError("bench: --methods is empty.")
     for m in methods:
@@ -159,7 +227,7 @@ def check_options(spec, methods, groups, charts, tols, dts):
         for v in vals:
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"bench {opt}: {v:g} must be a positive finite number.")
-    get_scene(spec)
+    get_scene(spec, scenario)
 
 
 def _failed_row(method, group, chart, setting, exc, wall=0.0):
@@ -174,16 +242,16 @@ def _job_failed(job, exc):
     return _failed_row(*job[2:6], exc)
 
 
-def _one(spec, method, group, chart, setting, q_ref, V_ref):
+def _one(spec, method, group, chart, setting, q_ref, V_ref, scenario=None):
     t0 = time.perf_counter()
     try:
-        return _one_run(spec, method, group, chart, setting, q_ref, V_ref)
+        return _one_run(spec, method, group, chart, setting, q_ref, V_ref, scenario)
     except Exception as exc:            # a failing run is a row of the sweep, not its end
         return _failed_row(method, group, chart, setting, exc, time.perf_counter() - t0)
 
 
-def _one_run(spec, method, group, chart, setting, q_ref, V_ref):
-    model, T = load_scene(spec)
+def _one_run(spec, method, group, chart, setting, q_ref, V_ref, scenario=None):
+    model, T = load_scene(spec, scenario)
     kw = dict(dt=setting) if method in FIXED else dict(rtol=setting, atol=setting)
     t0 = time.perf_counter()
     r = simulate(model, (0.0, T), method=method, group=group, chart=chart, progress=False, **kw)
@@ -207,13 +275,14 @@ def _one_run(spec, method, group, chart, setting, q_ref, V_ref):
     return row
 
 
-def _one_native(spec, name, setting, q_ref):
-    model, T = load_scene(spec)
-    kind, _, run = get_scene(spec).natives[name]
+def _one_native(spec, name, setting, q_ref, scenario=None):
+    model, T = load_scene(spec, scenario)
+    kind, _, run = get_scene(spec, scenario).natives[name]
     t0 = time.perf_counter()
     try:
         out = run(setting)
-        ok, msg = bool(np.isfinite(out["q"]).all()), "reached the end of t_span"
+        ok = bool(np.isfinite(out["q"]).all())
+        msg = "reached the end of t_span" if ok else "diverged: the final state is not finite"
     except Exception as exc:            # an engine solver failing is a result, not a crash
         out, ok, msg = dict(q=None, n_f=None, n_steps=None), False, f"{type(exc).__name__}: {exc}"
     wall = time.perf_counter() - t0
@@ -255,8 +324,9 @@ def _executor(workers, scheduler):
 
 
 def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None, scheduler=None, auto=True,
-          natives=True, repeat=3):
-    """Run the sweep; returns (reference dict, rows). With ``auto`` every method also
+          natives=True, repeat=3, scenario=None):
+    """Run the sweep; returns (reference dict, rows). ``scenario``: a variant the scene
+    declares (None: its default; see :func:`get_scene`). With ``auto`` every method also
     runs with group = chart = "auto"; with ``natives`` the scene's engine solvers run
     too (group "native"). ``scheduler``: see :func:`_executor`. ``progress``: bars for
     the reference run, the sweep and the timing pass, as in :func:`~lgt_bridge.simulate`
@@ -272,24 +342,27 @@ def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None,
     pass). ``repeat = 0`` keeps the first pass's times: with parallel workers they are
     distorted by what ran beside them, and the report says so. ``reference["timing"]``
     describes the method; the report states it."""
-    check_options(spec, methods, groups, charts, tols, dts)
+    check_options(spec, methods, groups, charts, tols, dts, scenario)
     if workers is not None and workers < 1:
         raise InputError(f"bench: workers = {workers} must be at least 1.")
     if not (isinstance(repeat, (int, np.integer)) and repeat >= 0):
         raise InputError(f"bench: repeat = {repeat!r} must be a whole number ≥ 0 (0: keep the first pass's "
                          "wall times).")
-    model, T = load_scene(spec)
+    model, T = load_scene(spec, scenario)
     t0 = time.perf_counter()
     ref = simulate(model, (0.0, T), t_eval=[0.0, T], progress=progress, **REFERENCE)
     if not ref.success:
         raise InputError(f"bench: the reference run failed ({ref.message}).")
     reference = dict(REFERENCE, n_steps=ref.stats["n_steps"], wall_s=time.perf_counter() - t0, t_end=T)
+    scenarios = scenarios_of(spec)
+    if scenarios:
+        reference["scenario"] = scenario if scenario is not None else scenarios[0]
     combos = [(g, c) for g in groups for c in charts] + ([("auto", "auto")] if auto else [])
-    jobs = [(_one, spec, m, g, c, s, ref.q[-1], ref.V[-1]) for m in methods for g, c in combos
+    jobs = [(_one, spec, m, g, c, s, ref.q[-1], ref.V[-1], scenario) for m in methods for g, c in combos
             for s in (dts if m in FIXED else tols)]
     if natives:
-        jobs += [(_one_native, spec, name, s, ref.q[-1]) for name, (_, settings, _) in
-                 get_scene(spec).natives.items() for s in settings]
+        jobs += [(_one_native, spec, name, s, ref.q[-1], scenario) for name, (_, settings, _) in
+                 get_scene(spec, scenario).natives.items() for s in settings]
     rows = [None] * len(jobs)
     done = []
     bar = Progress(progress, len(jobs), lambda: (len(done), f"{sum(not r['success'] for r in done)} failed"),
@@ -425,17 +498,26 @@ def _f(v, fmt):
 
 
 def write_report(out, spec, reference, rows, plots=True, target=1e-6):
-    """JSON of every run, a Markdown report and (with matplotlib) the PNG plots."""
+    """JSON of every run, a Markdown report and (with matplotlib) the PNG plots; files
+    named by :func:`report_name` (the scenario the sweep ran, ``reference["scenario"]``,
+    is part of the name when the scene declares scenarios)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    name = Path(spec.split(":")[0]).stem if ":" in spec else spec
+    scenario = reference.get("scenario")
+    name = report_name(spec, scenario)
     gaps = front_gaps(rows)
     best = {k: dict(series=v[0], wall_s=v[1], exact=v[2], interpolated=v[2])
             for k, v in best_at(rows, target).items()}
-    (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, reference=reference, runs=rows,
+    (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, scenario=scenario, reference=reference,
+                                                            runs=rows,
                                                             auto_front=gaps, target=target, best_at_target=best),
                                                        indent=1))
-    lines = [f"# Work-precision: {spec}", "",
+    try:
+        sc = get_scene(spec, scenario)
+    except InputError:                  # e.g. a scene file that is gone: report without its description
+        sc = BenchScene(None, None)
+    lines = [f"# Work-precision: {spec}" + (f", scenario {scenario}" if scenario else ""), "",
+             *([f"Scene: {sc.about}", ""] if sc.about else []),
              f"Reference: {reference['method']} on {reference['group']}/{reference['chart']} at rtol = atol = "
              f"{reference['rtol']:g}, t = 0 … {reference['t_end']:g} ({reference['n_steps']} steps).", "",
              f"Wall times: {timing_text(reference)}", "",
@@ -463,7 +545,7 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
                 if exact else f"≤ {w:.3f} s, measured (the cheapest run below the target; no run pair "
                               "brackets it, so nothing is interpolated)"))
         else:
-            lines.append(f"- {side}: no run reached it" if side == "bridge" or get_scene(spec).natives
+            lines.append(f"- {side}: no run reached it" if side == "bridge" or sc.natives
                          else "- native: this scene has no engine solver")
     if "bridge" in best and "native" in best:
         interp = best["native"][2] or best["bridge"][2]

@@ -156,24 +156,35 @@ def _bench(a):
         raise InputError(f"bench --workers = {a.workers}: must be at least 1.")
     ref, rows = bench.sweep(a.scene, methods, groups, charts, tols, dts, workers=a.workers,
                             scheduler=a.scheduler or a.dask, auto=not a.no_auto, progress=a.progress,
-                            repeat=a.repeat)
+                            repeat=a.repeat, scenario=a.scenario)
     path = bench.write_report(a.out, a.scene, ref, rows, plots=not a.no_plots)
     print(path.read_text())
     return 0
 
 
 def _scene_epilog():
-    from .bench import all_scenes
+    import textwrap
+
+    from .bench import SceneFamily, all_scenes
     try:
         scenes = all_scenes()
     except Exception as exc:            # help must not fail on a broken adapter
         return f"scenes: (could not list the engines' scenes: {exc})"
     lines = ["scenes (built-in, then those of the installed engine adapters):"]
-    lines += [f"  {k:<22} {v.about}" for k, v in scenes.items()]
+    for k, v in scenes.items():
+        name = f"{k}:{v.arg}" if isinstance(v, SceneFamily) else k
+        about = textwrap.wrap(v.about, 64) or [""]
+        lines += [f"  {name:<22} {about[0]}"] + [f"  {'':<22} {x}" for x in about[1:]]
+        for i, (sn, sv) in enumerate(v.scenarios.items()):
+            text = sv if isinstance(sv, str) else sv.about
+            wrapped = textwrap.wrap(f"--scenario {sn}{' (default)' if i == 0 else ''}: {text}", 62)
+            lines += [f"  {'':<24}{wrapped[0]}"] + [f"  {'':<26}{x}" for x in wrapped[1:]]
     lines += ["  path/to/file.py:func   your own: func() returns (model, t_end)",
               "  extremes               the extremes suite's report",
               "",
               "files written into --out (default bench-results/):",
+              "  (<scene>: the scene's name; pinocchio_robot:solo12 -> pinocchio_robot_solo12, then",
+              "  _<scenario> for a scene with scenarios, e.g. pinocchio_robot_solo12_pd)",
               "  bench_<scene>.json     every run: settings, errors, f evaluations, steps, wall time",
               "  bench_<scene>.md       the report: table of runs, cheapest at 1e-6, auto vs the front",
               "  <scene>_error_vs_wall.png, <scene>_error_vs_nf.png, <scene>_energy_drift.png",
@@ -243,6 +254,10 @@ def _parser():
     b.add_argument("--charts", default="exp,cay", help="comma-separated: exp, cay, auto (default exp,cay)")
     b.add_argument("--tols", default="1e-5,1e-7,1e-9", help="rtol = atol of adaptive methods")
     b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods (s)")
+    b.add_argument("--scenario", default=None, metavar="NAME",
+                   help="a variant of a scene that declares scenarios (listed under the scene below, the "
+                   "first its default), e.g. pinocchio_robot:solo12 --scenario pd; checked before any run, "
+                   "an error for a scene without scenarios. Its name is added to the output files' names")
     b.add_argument("--out", default="bench-results", help="output directory (default bench-results)")
     b.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     b.add_argument("--scheduler", default=None, help="run the sweep on a Dask cluster at this address "
@@ -262,6 +277,9 @@ def _parser():
 
 def _dispatch(a):
     if a.cmd == "bench" and a.scene == "extremes":
+        if a.scenario is not None:
+            raise InputError(f"bench --scenario {a.scenario}: scene 'extremes' has no scenarios; leave out "
+                             "--scenario.")
         from . import extremes
         path = extremes.write_report(a.out, long_steps=a.long_steps)
         print(path.read_text())

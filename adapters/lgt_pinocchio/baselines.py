@@ -1,7 +1,12 @@
 """What Pinocchio users write to integrate a free-flyer model (shared/notes/pinocchio.md),
 as baselines for the bench: semi-implicit Euler + pin.integrate, fixed-step RK4 on
-(q, v) with quaternion renormalization, scipy DOP853 with renormalization; and the two
-example scenes (free asymmetric body, floating humanoid)."""
+(q, v) with quaternion renormalization, scipy DOP853 with renormalization; the PD
+torque users write (``pd_torque``); and the two example scenes (free asymmetric body,
+floating humanoid).
+
+Every loop takes ``tau``: None (zero torque) or ``tau(t, q, v)`` returning the joint
+torques (size nv) from Pinocchio's own q and v, the same callable
+:class:`~lgt_pinocchio.PinocchioModel` takes, so baseline and bridge integrate one model."""
 import numpy as np
 import pinocchio as pin
 from scipy.integrate import solve_ivp
@@ -21,53 +26,93 @@ def qdot(model, q, v):
 
 
 class Counter:
-    def __init__(self, model):
+    """pin.aba with the torque ``tau`` (None: zero), counting the calls."""
+
+    def __init__(self, model, tau=None):
         self.model, self.data, self.n = model, model.createData(), 0
+        self.tau, self.zero = tau, np.zeros(model.nv)
 
-    def aba(self, q, v):
+    def aba(self, q, v, t=0.0):
         self.n += 1
-        return pin.aba(self.model, self.data, q, v, np.zeros(self.model.nv))
+        tau = self.zero if self.tau is None else self.tau(t, q, v)
+        return pin.aba(self.model, self.data, q, v, tau)
 
 
-def semi_implicit_euler(model, q, v, T, dt):
-    c = Counter(model)
-    for _ in range(int(round(T / dt))):
-        v = v + dt * c.aba(q, v)
+def semi_implicit_euler(model, q, v, T, dt, tau=None):
+    c = Counter(model, tau)
+    for k in range(int(round(T / dt))):
+        v = v + dt * c.aba(q, v, k * dt)
         q = pin.integrate(model, q, v * dt)
     return q, c.n
 
 
-def rk4_renorm(model, q, v, T, dt):
-    c = Counter(model)
+def rk4_renorm(model, q, v, T, dt, tau=None):
+    c = Counter(model, tau)
     nq = model.nq
 
-    def rhs(y):
-        return np.concatenate([qdot(model, y[:nq], y[nq:]), c.aba(y[:nq], y[nq:])])
+    def rhs(y, t):
+        return np.concatenate([qdot(model, y[:nq], y[nq:]), c.aba(y[:nq], y[nq:], t)])
 
     y = np.concatenate([q, v])
-    for _ in range(int(round(T / dt))):
-        k1 = rhs(y)
-        k2 = rhs(y + dt / 2 * k1)
-        k3 = rhs(y + dt / 2 * k2)
-        k4 = rhs(y + dt * k3)
+    for k in range(int(round(T / dt))):
+        t = k * dt
+        k1 = rhs(y, t)
+        k2 = rhs(y + dt / 2 * k1, t + dt / 2)
+        k3 = rhs(y + dt / 2 * k2, t + dt / 2)
+        k4 = rhs(y + dt * k3, t + dt)
         y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         y[3:7] /= np.linalg.norm(y[3:7])
     return y[:nq], c.n
 
 
-def dop853_renorm(model, q, v, T, tol):
-    c = Counter(model)
+def dop853_renorm(model, q, v, T, tol, tau=None):
+    c = Counter(model, tau)
     nq = model.nq
 
     def rhs(t, y):
         y = y.copy()
         y[3:7] /= np.linalg.norm(y[3:7])
-        return np.concatenate([qdot(model, y[:nq], y[nq:]), c.aba(y[:nq], y[nq:])])
+        return np.concatenate([qdot(model, y[:nq], y[nq:]), c.aba(y[:nq], y[nq:], t)])
 
     s = solve_ivp(rhs, (0, T), np.concatenate([q, v]), method="DOP853", rtol=tol, atol=tol)
+    if s.status != 0:
+        raise RuntimeError(f"solve_ivp DOP853: {s.message}")
     y = s.y[:, -1].copy()
     y[3:7] /= np.linalg.norm(y[3:7])
     return y[:nq], c.n
+
+
+def pd_torque(model, q_ref, kp, kd):
+    """tau(t, q, v) = kp (q_ref - q) - kd v on the actuated joints (every joint after the
+    free-flyer root; their configuration spaces are vector spaces, nq = nv), zero on the
+    root: what users write for joint-space PD control. kp, kd: scalars or vectors of
+    size nv - 6 (one gain per actuated joint)."""
+    iq, iv = _actuated(model)
+    kp = np.broadcast_to(np.asarray(kp, float), iv.shape).copy()
+    kd = np.broadcast_to(np.asarray(kd, float), iv.shape).copy()
+    target = np.asarray(q_ref, float)[iq].copy()
+    nv = model.nv
+    if np.array_equal(iq, np.arange(7, model.nq)) and np.array_equal(iv, np.arange(6, nv)):
+        iq, iv = slice(7, None), slice(6, None)      # the usual layout: views, no gathers
+
+    def tau(t, q, v):
+        out = np.zeros(nv)
+        out[iv] = kp * (target - q[iq]) - kd * v[iv]
+        return out
+    return tau
+
+
+def _actuated(model):
+    """(q indices, v indices) of the joints after the free-flyer root, all with nq = nv."""
+    iq, iv = [], []
+    for j in range(2, model.njoints):
+        jm = model.joints[j]
+        if jm.nq != jm.nv:
+            raise ValueError(f"pd_torque: joint {model.names[j]!r} is a {jm.shortname()} (nq = {jm.nq}, "
+                             f"nv = {jm.nv}); only joints with nq = nv are actuated here.")
+        iq += range(jm.idx_q, jm.idx_q + jm.nq)
+        iv += range(jm.idx_v, jm.idx_v + jm.nv)
+    return np.array(iq, int), np.array(iv, int)
 
 
 def free_body():

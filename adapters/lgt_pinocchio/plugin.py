@@ -16,7 +16,9 @@ class _PinocchioPlugin:
 
     @staticmethod
     def bench_scenes():
-        """Example scenes with the Pinocchio user loops as native baselines."""
+        """Example scenes with the Pinocchio user loops as native baselines, and the family
+        ``pinocchio_robot:NAME`` (scenarios free, pd) of example-robot-data's free-flyer
+        robots (:mod:`lgt_pinocchio.bench`; the loaders are imported only when one is named)."""
         from .bench import bench_scenes
         return bench_scenes()
 
