@@ -226,6 +226,7 @@ def fresh(model):
     """Drop the caches a run builds on its model (so a reused model costs what a new one does)."""
     model._P = None
     model._Mbar_inv = None
+    model._Mbar_pd = None
 
 
 def bridge_run(model, T, method, group, chart, timer=None, **kw):

@@ -309,3 +309,17 @@ def test_drop_in_dop853_interpolates_exudyn_output_steps():
         p = sol.y[:4, k]
         errs.append(np.abs(data[k + 1, 1:].reshape(3, 3) - ref.qmat(p / np.linalg.norm(p))).max())
     assert max(errs) < 1e-8, max(errs)
+
+
+def test_singular_mass_is_refused_before_the_first_step():
+    """A body with no inertia about one axis: InputError naming it, from the constant-M̄
+    path (Cholesky fails, then the eigen check names the direction)."""
+    from exudyn.utilities import RigidBodyInertia
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    mbs.CreateRigidBody(inertia=RigidBodyInertia(mass=1.0, inertiaTensor=np.diag([0.0, 1.0, 1.0])),
+                        nodeType=em.EP, referencePosition=[0, 0, 0], initialAngularVelocity=[0, 1, 0])
+    mbs.Assemble()
+    model = ExudynModel(mbs)
+    with pytest.raises(InputError, match="mass matrix at q0 is singular.*body 0"):
+        simulate(model, (0, 0.1), method="dopri5")

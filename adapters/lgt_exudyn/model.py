@@ -80,6 +80,7 @@ class ExudynModel(Model):
         self._compiled = _backend.compiled(backend)
         self._P = None                  # the kernels' pack (built at the first f)
         self._Mbar_inv = None
+        self._Mbar_pd = None            # M̄ constant and positive definite (checked once)
         exu = _exudyn()
         self.exu, self.mbs = exu, mbs
         if not getattr(mbs, "systemIsConsistent", False):
@@ -700,6 +701,28 @@ class ExudynModel(Model):
         if self._Mbar_inv is None:
             self._Mbar_inv = np.linalg.inv(self._Mbar)
         return self._Mbar_inv @ B
+
+    def check_mass_matrix(self, q):
+        """InputError when the twist mass matrix at q is singular or indefinite (as
+        ``simulate`` checks every model before the first step); a constant positive definite
+        M̄ is checked once, by a Cholesky factorization, for all later runs."""
+        from lgt_bridge.simulate import MASS_CHECK_MAX_NV, mass_defects, mass_message
+        if self._Mbar is not None:
+            if self._Mbar_pd is None:
+                try:
+                    np.linalg.cholesky(self._Mbar)
+                    self._Mbar_pd = True
+                except np.linalg.LinAlgError:
+                    self._Mbar_pd = False
+            if self._Mbar_pd:
+                return
+        if self.layout.nv > MASS_CHECK_MAX_NV:
+            return
+        M = self.mass_matrix(q)
+        A = self.constraint_jacobian(q) if self.n_constraints else None
+        d = mass_defects(M, A)
+        if d:
+            raise InputError(mass_message(d, [self.layout.owner("V", i) for i, _ in d]))
 
     def _pack(self):
         if self._P is None:
