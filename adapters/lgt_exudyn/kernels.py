@@ -151,12 +151,17 @@ def pack(model, nc_max=None, views=True):
     I[WREF:WZ + 1] = woff[:-1]
     W = np.zeros(int(woff[-1]))
     W[woff[0]:woff[0] + n2] = np.asarray(model.ref, float)
+    by_size = {}                          # components of one size are inverted in one call
     for c, members in enumerate(comps):
-        blk = np.ascontiguousarray(Mb[np.ix_(members, members)])
-        inv = np.linalg.inv(blk)
-        inv = 0.5 * (inv + inv.T)
-        W[woff[5] + cf[c]:woff[5] + cf[c + 1]] = blk.reshape(-1)
-        W[woff[6] + cf[c]:woff[6] + cf[c + 1]] = inv.reshape(-1)
+        by_size.setdefault(len(members), []).append(c)
+    for size, cs in by_size.items():
+        idx = np.array([comps[c] for c in cs], np.int64)                  # (k, size)
+        blks = Mb[idx[:, :, None], idx[:, None, :]]                       # (k, size, size)
+        inv = np.linalg.inv(blks)
+        inv = 0.5 * (inv + np.swapaxes(inv, 1, 2))
+        at = (cf[np.array(cs)][:, None] + np.arange(size * size)[None, :]).reshape(-1)
+        W[woff[5] + at] = blks.reshape(-1)
+        W[woff[6] + at] = inv.reshape(-1)
 
     P = Pack()
     P.I, P.W, P.nv, P.n2, P.nc_max, P.constant_mass = I, W, nv, n2, nc, not dense

@@ -744,6 +744,12 @@ class ExudynModel(Model):
         return self.H(q) @ Vd + self.Hdot_V(q, V)
 
     def write_back(self, q, V, t):
+        if self._compiled and self.nv:
+            P = self._pack()
+            self._kernels.write(P.I, P.W, np.ascontiguousarray(q, float), np.ascontiguousarray(V, float),
+                                0.0, P.qpos, P.qvel)
+            self.sd.SetTime(t)
+            return
         self._write(q, self.rates_from_twist(q, V), t)
 
 
