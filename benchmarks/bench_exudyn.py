@@ -224,9 +224,7 @@ def native_dopri5(make, T, tol):
 
 def fresh(model):
     """Drop the caches a run builds on its model (so a reused model costs what a new one does)."""
-    model._P = None
-    model._Mbar_inv = None
-    model._Mbar_pd = None
+    model.reset_caches()
 
 
 def bridge_run(model, T, method, group, chart, timer=None, **kw):

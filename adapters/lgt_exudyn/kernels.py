@@ -35,6 +35,9 @@ related cases share a kernel; arrays are float64 C-contiguous, M, Mbar, C, A 2-D
   A M̄⁻¹ Aᵀ in the kernel; M̄⁻¹ from the packed diagonal blocks of the constant M̄ (Mbar
   0 x 0) or a dense Mbar factorized in the kernel.
 
+* :func:`free_rhs` (I, W, q, V, Q, Qbar, Vd): :func:`forces` then :func:`solve` for an
+  unconstrained model with a constant M̄ (one call instead of two; :func:`plain_f`).
+
 Flags of :func:`solve`: 0 done; 1 the Schur complement is not (well) positive definite
 (redundant constraints): W holds A M̄⁻¹ Aᵀ, its right-hand side, M̄⁻¹ Q̄ and M̄⁻¹ Aᵀ
 (:func:`buffers`), finish with :func:`solve_fallback`; 2 Mbar is not positive definite.
@@ -78,23 +81,21 @@ class Pack:
 
 
 def _components(Mb):
-    """Connected components of the nonzero pattern of M̄ (lists of V indices, sorted)."""
-    nv = Mb.shape[0]
-    parent = list(range(nv))
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-    for i, j in zip(*np.nonzero(Mb)):
-        a, b = root(int(i)), root(int(j))
-        if a != b:
-            parent[max(a, b)] = min(a, b)
-    comps = {}
-    for i in range(nv):
-        comps.setdefault(root(i), []).append(i)
-    return [comps[k] for k in sorted(comps)]
+    """Connected components of the nonzero pattern of M̄: (members, sizes), the members of
+    each component sorted and one component after another, ordered by their first index.
+    Every index takes the smallest label among its neighbours until nothing changes, so
+    each ends with its component's first index."""
+    i, j = np.nonzero(Mb)
+    lab = np.arange(Mb.shape[0])
+    while True:
+        new = lab.copy()
+        np.minimum.at(new, i, lab[j])
+        new = new[new]                          # new[k] ≤ k lies in k's component: jump there
+        if (new == lab).all():
+            break
+        lab = new
+    order = np.argsort(lab, kind="stable")
+    return order.astype(np.int64), np.unique(lab, return_counts=True)[1].astype(np.int64)
 
 
 def _flat(rows):
@@ -124,13 +125,12 @@ def pack(model, nc_max=None, views=True):
             rgroups.append([G_EP if typ == "RigidBodyEP" else G_RXYZ, nrot, *rot, iv])
     ident += [[a, b] for a, b in zip(vq, vv)]
     Mb = getattr(model, "_Mbar", None)
-    comps = _components(Mb) if Mb is not None else []
+    cidx, sizes = _components(Mb) if Mb is not None else (np.zeros(0, np.int64), np.zeros(0, np.int64))
     if nc_max is None:
         nc_max = int(getattr(model, "n_constraints", getattr(model, "nae", 0)))
     nc = int(nc_max)
-    coff = np.concatenate([[0], np.cumsum([len(c) for c in comps])]).astype(np.int64)
-    cf = np.concatenate([[0], np.cumsum([len(c) ** 2 for c in comps])]).astype(np.int64)
-    cidx = np.array([i for c in comps for i in c], np.int64)
+    coff = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    cf = np.concatenate([[0], np.cumsum(sizes ** 2)]).astype(np.int64)
 
     # I: header, nodes, vectors (iq, iv), identity pairs (iq, iv), rotation groups, component
     # offsets, members, float offsets, integer scratch
@@ -139,7 +139,7 @@ def pack(model, nc_max=None, views=True):
     off = np.concatenate([[0], np.cumsum([len(p) for p in parts])])
     I = np.concatenate(parts).astype(np.int64)
     I[NB], I[NVEC], I[NID], I[NRG], I[NV], I[N2], I[NCOMP], I[NCMAX] = (
-        len(nodes), len(vq), len(ident), len(rgroups), nv, n2, len(comps), nc)
+        len(nodes), len(vq), len(ident), len(rgroups), nv, n2, len(sizes), nc)
     I[ONODE:OISCR + 1] = off[1:9]
 
     # W: ref, q_m, rotation blocks, scratch T, M̄⁻¹Q̄, M̄ blocks, M̄⁻¹ blocks, Y, S, L, r,
@@ -151,15 +151,13 @@ def pack(model, nc_max=None, views=True):
     I[WREF:WZ + 1] = woff[:-1]
     W = np.zeros(int(woff[-1]))
     W[woff[0]:woff[0] + n2] = np.asarray(model.ref, float)
-    by_size = {}                          # components of one size are inverted in one call
-    for c, members in enumerate(comps):
-        by_size.setdefault(len(members), []).append(c)
-    for size, cs in by_size.items():
-        idx = np.array([comps[c] for c in cs], np.int64)                  # (k, size)
+    for size in np.unique(sizes):         # components of one size are inverted in one call
+        cs = np.flatnonzero(sizes == size)
+        idx = cidx[coff[cs][:, None] + np.arange(size)]                  # (k, size)
         blks = Mb[idx[:, :, None], idx[:, None, :]]                       # (k, size, size)
         inv = np.linalg.inv(blks)
         inv = 0.5 * (inv + np.swapaxes(inv, 1, 2))
-        at = (cf[np.array(cs)][:, None] + np.arange(size * size)[None, :]).reshape(-1)
+        at = (cf[cs][:, None] + np.arange(size * size)[None, :]).reshape(-1)
         W[woff[5] + at] = blks.reshape(-1)
         W[woff[6] + at] = inv.reshape(-1)
 
@@ -569,6 +567,15 @@ def solve(I, W, Mbar, A, Qbar, gam, Vd):
     return 0
 
 
+@njit(f"void({_I}, {_V}, {_V}, {_V}, {_V}, {_V}, {_V})", cache=True, error_model="numpy")
+def free_rhs(I, W, q, V, Q, Qbar, Vd):
+    """:func:`forces` and :func:`solve` of an unconstrained model with its constant M̄ packed,
+    in one call: Q̄ from Exudyn's residual Q, then V̇ = M̄⁻¹ Q̄ into Vd."""
+    none = np.zeros((0, 0))
+    forces(I, W, q, V, Q, none, Qbar, none)
+    solve(I, W, none, np.zeros((0, I[NV])), Qbar, np.zeros(0), Vd)
+
+
 def buffers(P, nc):
     """(S, r, Miv, Y) a solve left in W for nc constraint rows: A M̄⁻¹ Aᵀ, A M̄⁻¹ Q̄ + γ,
     M̄⁻¹ Q̄ and M̄⁻¹ Aᵀ transposed (nc x nv)."""
@@ -589,6 +596,28 @@ def solve_fallback(P, nc, Vd):
 
 # ---------------------------------------------------------------------------- wiring
 _EPS_GAMMA = 1e-5
+
+
+def plain_f(model, P):
+    """f of an unconstrained model with a constant M̄ packed (free bodies, trees of vector
+    coordinates): :func:`f_compiled`'s calls for that case with everything looked up once,
+    as a closure (q, V float64 C-contiguous), forces and solve in one kernel call
+    (:func:`free_rhs`). None for any other model."""
+    if model.n_constraints or not P.constant_mass or not P.nv:
+        return None
+    S, mbs, sd = model.solver, model.mbs, model.sd
+    compute, residual, set_time = S.ComputeODE2RHS, S.GetSystemResidual, sd.SetTime
+    I, W, qpos, qvel, Qbar, nv = P.I, P.W, P.qpos, P.qvel, P.Qbar, P.nv
+
+    def f(q, V, t):
+        write(I, W, q, V, 0.0, qpos, qvel)
+        set_time(t)
+        compute(mbs)
+        Vd = np.empty(nv)
+        free_rhs(I, W, q, V, residual(), Qbar, Vd)
+        model.n_eval += 1
+        return Vd
+    return f
 
 
 def f_compiled(model, P, q, V, t):

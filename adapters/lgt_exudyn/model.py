@@ -33,10 +33,27 @@ def _exudyn():
     return exudyn
 
 
+def _engine_error(model, what, exc):
+    """The ModelError for an exception Exudyn raised while ``what`` evaluated the model (a
+    user function that failed, an evaluation Exudyn rejects), or None when ``exc`` is not
+    Exudyn's (a bug: it keeps its traceback)."""
+    if not type(exc).__module__.startswith("exudyn"):
+        return None
+    text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
+    lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
+    msg = " ".join(lines) if lines else type(exc).__name__
+    if len(msg) > 300:
+        msg = msg[:300] + "..."
+    t = model.sd.GetTime()
+    return ModelError(f"Exudyn raised while lgt_bridge evaluated the model ({what}) at "
+                      f"t = {t:.9g}: {msg}. If a user function failed, "
+                      "fix it (run the script with Exudyn's own solver to see it in context).")
+
+
 def _engine_call(method):
-    """Turn an exception Exudyn raises inside ``method`` (a user function that failed, an
-    evaluation Exudyn rejects) into a ModelError naming the time and Exudyn's message; the
-    original stays chained (``--debug`` shows it)."""
+    """Turn an exception Exudyn raises inside ``method`` into a ModelError naming the time
+    and Exudyn's message (:func:`_engine_error`); the original stays chained (``--debug``
+    shows it)."""
     import functools
 
     @functools.wraps(method)
@@ -46,17 +63,10 @@ def _engine_call(method):
         except LGTError:
             raise
         except Exception as exc:
-            if not type(exc).__module__.startswith("exudyn"):
-                raise                                 # not Exudyn's: a bug, keep its traceback
-            text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
-            lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
-            what = " ".join(lines) if lines else type(exc).__name__
-            if len(what) > 300:
-                what = what[:300] + "..."
-            t = self.sd.GetTime()
-            raise ModelError(f"Exudyn raised while lgt_bridge evaluated the model ({method.__name__}) at "
-                             f"t = {t:.9g}: {what}. If a user function failed, "
-                             "fix it (run the script with Exudyn's own solver to see it in context).") from exc
+            err = _engine_error(self, method.__name__, exc)
+            if err is None:
+                raise
+            raise err from exc
     return call
 
 
@@ -636,9 +646,11 @@ class ExudynModel(Model):
             self._write(q, np.zeros(0), t)
             return np.zeros(0)
         if self._compiled:
-            P = self._pack()
-            return self._kernels.f_compiled(self, P, np.ascontiguousarray(q, float),
-                                            np.ascontiguousarray(V, float), float(t))
+            P = self._P if self._P is not None else self._pack()
+            q, V = np.ascontiguousarray(q, float), np.ascontiguousarray(V, float)
+            if P.plain_f is not None:
+                return P.plain_f(q, V, float(t))
+            return self._kernels.f_compiled(self, P, q, V, float(t))
         M, Q, A, gam = self._evaluate(q, V, t)
         if A is None:
             return np.linalg.solve(M, Q)
@@ -724,11 +736,35 @@ class ExudynModel(Model):
         if d:
             raise InputError(mass_message(d, [self.layout.owner("V", i) for i, _ in d]))
 
+    def reset_caches(self):
+        """Drop what the model builds on its first runs (the kernels' pack and the f built on
+        it, the cached M̄⁻¹ and M̄'s definiteness): the next run pays what a run on a fresh
+        model pays (benchmarks), and a system assembled again is packed again."""
+        self._P = None
+        self._Mbar_inv = None
+        self._Mbar_pd = None
+        self.__dict__.pop("f", None)
+
     def _pack(self):
         if self._P is None:
             from . import kernels
             self._kernels = kernels
-            self._P = kernels.pack(self)
+            P = self._P = kernels.pack(self)
+            P.plain_f = plain = kernels.plain_f(self, P)
+            if plain is not None and type(self) is ExudynModel:
+                # unconstrained, constant M̄: f is the kernels' closure from now on (the
+                # same calls as below, with nothing looked up per call)
+                contiguous = np.ascontiguousarray
+
+                def f(q, V, t):
+                    try:
+                        return plain(contiguous(q, float), contiguous(V, float), float(t))
+                    except Exception as exc:
+                        err = _engine_error(self, "f", exc)
+                        if err is None:
+                            raise
+                        raise err from exc
+                self.f = f
         return self._P
 
     @_engine_call

@@ -52,24 +52,20 @@ def views(w, off):
 def body_table(sets, codes):
     """The int64 body table of a LocalProblem's body sets (``codes``: parameterization
     name -> kernel code)."""
-    rows = []
+    tabs = []
     for s in sets:
-        code = codes[s.lgt.param.name]
-        for k in range(len(s.ids)):
-            row = np.full(NCOL, -1, np.int64)
-            row[PARAM], row[SE3], row[CAY], row[ROT_ONLY] = code, int(s.se3), int(s.cay), int(s.rot_only)
-            row[XOFF] = s.xidx[k, 0]
-            nrot = s.lgt.param.nrot
-            row[NROT] = nrot
-            qi = s.qidx[k]
-            if s.rot_only:
-                row[ROT:ROT + nrot] = qi
-            else:
-                row[POS:POS + 3] = qi[:3]
-                row[ROT:ROT + nrot] = qi[3:]
-            row[TWIST:TWIST + len(s.vidx[k])] = s.vidx[k]
-            rows.append(row)
-    return np.array(rows, np.int64).reshape(-1, NCOL)
+        n, nrot = len(s.ids), s.lgt.param.nrot
+        t = np.full((n, NCOL), -1, np.int64)
+        t[:, PARAM], t[:, SE3], t[:, CAY], t[:, ROT_ONLY] = codes[s.lgt.param.name], s.se3, s.cay, s.rot_only
+        t[:, XOFF], t[:, NROT] = s.xidx[:, 0], nrot
+        if s.rot_only:
+            t[:, ROT:ROT + nrot] = s.qidx
+        else:
+            t[:, POS:POS + 3] = s.qidx[:, :3]
+            t[:, ROT:ROT + nrot] = s.qidx[:, 3:]
+        t[:, TWIST:TWIST + s.vidx.shape[1]] = s.vidx
+        tabs.append(t)
+    return np.concatenate(tabs) if tabs else np.zeros((0, NCOL), np.int64)
 
 
 @njit(cache=True, error_model="numpy")
