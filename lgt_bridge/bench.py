@@ -9,7 +9,9 @@ in this process, best of ``repeat`` (see :func:`sweep`), so that no run looks fa
 or slower because of what ran beside it. Output: a JSON of every run, a Markdown table
 and (with matplotlib) PNG plots. Every option is checked
 (:func:`check_options`) before the reference run; a run that fails (an exception in the
-run or in its worker) becomes a row with ``success = False`` and its error.
+run or in its worker) becomes a row with ``success = False`` and its error, and a worker
+process that dies (a crash inside an engine, the memory exhausted) costs only the run it was
+running: the runs its pool could not finish are run again, each in a process of its own.
 
 A scene is a built-in name (see SCENES), ``PREFIX:ARG`` for a family of scenes an adapter
 registers (:class:`SceneFamily`, e.g. ``pinocchio_robot:solo12``), or
@@ -22,6 +24,7 @@ import json
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -376,22 +379,49 @@ def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None,
             bar.step()
     else:
         submit, completed, close = _executor(workers, scheduler)
+        broken = []
         try:
             futs = {submit(*j): i for i, j in enumerate(jobs)}
             for f in completed(list(futs)):
                 i = futs[f]
                 try:
                     rows[i] = f.result()
+                except BrokenProcessPool:       # a worker died: the pool fails every unfinished job
+                    broken.append(i)
+                    continue
                 except Exception as exc:        # the worker itself failed: still a row
                     rows[i] = _job_failed(jobs[i], exc)
                 done.append(rows[i])
                 bar.step()
         finally:
             close()
+        for i in sorted(broken):               # each again, alone in a process of its own
+            rows[i] = _run_isolated(jobs[i])
+            done.append(rows[i])
+            bar.step()
     bar.close()
     reference["timing"] = _retime(jobs, rows, repeat, serial, workers, scheduler, progress)
     rows.sort(key=lambda r: (r["method"], r["group"], r["chart"], -r["value"]))
     return reference, rows
+
+
+def _run_isolated(job):
+    """A job in a fresh process of its own (after a worker died under a pool of them): its
+    row, or a failed row saying that the process running it died."""
+    with ProcessPoolExecutor(max_workers=1) as ex:
+        try:
+            return ex.submit(*job).result()
+        except BrokenProcessPool:
+            return _job_failed(job, WorkerDied(
+                "the worker process running this job died (it exited or was killed, e.g. by a crash "
+                "inside the engine or by running out of memory); the rest of the sweep ran. Run this "
+                "setting alone with simulate() to see what happens."))
+        except Exception as exc:
+            return _job_failed(job, exc)
+
+
+class WorkerDied(RuntimeError):
+    """A sweep's worker process ended while running a job (the row's message)."""
 
 
 def _run_job(job):

@@ -174,3 +174,33 @@ def test_every_plot_of_a_sweep_uses_the_same_style_per_series_and_legends_sit_ou
     assert len(seen) == 3 and len(styles) == 6                       # 2 methods x (SE3, SO3xR3, auto)
     for lines, outside in seen:
         assert lines == styles and outside                            # same style in every plot
+
+
+def test_a_worker_process_that_dies_costs_only_its_own_run(tmp_path):
+    """A run whose worker process dies (here: os._exit inside the model's f, at a stage time
+    only the dt = 5e-4 run reaches, and only in worker processes) is a failed row saying the
+    worker died; every other run of the sweep, including those the broken pool could not
+    finish, has its result, and the report is written."""
+    f = tmp_path / "dying.py"
+    f.write_text(
+        "import multiprocessing, os\n"
+        "from lgt_bridge import scenes\n\n"
+        "def make():\n"
+        "    m = scenes.free_body()\n"
+        "    f0 = m.f\n\n"
+        "    def f(q, V, t):\n"
+        "        if multiprocessing.parent_process() is not None and abs(t - 2.5e-4) < 1e-12:\n"
+        "            os._exit(3)\n"
+        "        return f0(q, V, t)\n"
+        "    m.f = f\n"
+        "    return m, 0.01\n")
+    ref, rows = bench.sweep(f"{f}:make", ["rkmk4", "dopri5"], ["SE3"], ["exp"], [1e-6, 1e-8], [1e-3, 5e-4],
+                            workers=2, auto=False, progress=False, repeat=1)
+    by = {(r["method"], r["value"]): r for r in rows}
+    assert len(rows) == 4
+    dead = by[("rkmk4", 5e-4)]
+    assert not dead["success"] and "WorkerDied" in dead["message"] and "process" in dead["message"]
+    for key in [("rkmk4", 1e-3), ("dopri5", 1e-6), ("dopri5", 1e-8)]:
+        assert by[key]["success"] and by[key]["pose_error"] < 1e-5 and by[key]["wall_repeats"] == 1
+    text = bench.write_report(tmp_path, f"{f}:make", ref, rows, plots=False).read_text()
+    assert "WorkerDied" in text
