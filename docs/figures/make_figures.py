@@ -1,11 +1,21 @@
-"""Regenerate the README's work-precision figures (≈ 1 min on 2 cores):
+"""Regenerate the README's work-precision figures (≈ 8 min on 2 cores; ``--only NAME`` for one set):
 
-    python docs/figures/make_figures.py
+    python docs/figures/make_figures.py [--only heavy_top|exudyn_heavy_top|solo12_pd] [--out DIR]
 
-A ``lgt-bridge bench heavy_top`` sweep (the engine-free heavy top, 0.1 s, spherical
-joint) whose two work-precision plots are written here as ``heavy_top_error_vs_wall.png``
-and ``heavy_top_error_vs_nf.png``; the JSON and Markdown report go to a temporary
-directory (pass ``--out DIR`` to keep them). Wall times: best of 3 lone runs each."""
+Three ``lgt-bridge bench`` sweeps, each writing its two work-precision plots here as
+``<name>_error_vs_wall.png`` and ``<name>_error_vs_nf.png``:
+
+* ``heavy_top`` — the engine-free heavy top (0.1 s, spherical joint), every method on both
+  groups and charts (≈ 1 min);
+* ``exudyn_heavy_top`` — the Exudyn heavy top (EP node + spherical joint, 0.5 s) with
+  Exudyn's own generalized-α on EP and RotVecLG nodes in the same plot (≈ 5 min: Exudyn's
+  runs go up to 128 000 steps); needs the ``exudyn`` extra;
+* ``solo12_pd`` — ``pinocchio_robot:solo12 --scenario pd`` (the quadruped under PD control,
+  1 s) with the Pinocchio users' loops (semi-implicit Euler + ``pin.integrate``, RK4 and
+  DOP853 with renormalization) in the same plot (≈ 2 min); needs the ``robots`` extra.
+
+The JSON and Markdown reports go to a temporary directory (``--out DIR`` keeps them).
+Wall times: best of 3 lone runs each."""
 import argparse
 import shutil
 import tempfile
@@ -14,20 +24,37 @@ from pathlib import Path
 from lgt_bridge import bench
 
 HERE = Path(__file__).resolve().parent
-SWEEP = dict(spec="heavy_top", methods=["rkmk4", "dopri5", "dop853", "genalpha"], groups=["SE3", "SO3xR3"],
-             charts=["exp", "cay"], tols=[1e-5, 1e-7, 1e-9], dts=[1e-3, 5e-4, 2.5e-4])
+TOLS = [1e-5, 1e-7, 1e-9]
+FIGURES = {
+    "heavy_top": dict(spec="heavy_top", methods=["rkmk4", "dopri5", "dop853", "genalpha"],
+                      groups=["SE3", "SO3xR3"], charts=["exp", "cay"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
+    "exudyn_heavy_top": dict(spec="exudyn_heavy_top", methods=["rkmk4", "dopri5", "dop853", "genalpha"],
+                             groups=["SE3", "SO3xR3"], charts=["exp"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
+    "solo12_pd": dict(spec="pinocchio_robot:solo12", scenario="pd", methods=["rkmk4", "dop853", "genalpha"],
+                      groups=["SE3", "SO3xR3"], charts=["exp"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
+}
+
+
+def make(name, out):
+    """Run one figure's sweep, write its report to ``out`` and copy its two plots here."""
+    spec = FIGURES[name]
+    ref, rows = bench.sweep(**spec, repeat=3)
+    print(bench.write_report(out, spec["spec"], ref, rows))
+    stem = bench.report_name(spec["spec"], spec.get("scenario"))
+    for plot in ("error_vs_wall", "error_vs_nf"):
+        shutil.copyfile(out / f"{stem}_{plot}.png", HERE / f"{name}_{plot}.png")
+        print(HERE / f"{name}_{plot}.png")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=None, help="keep the sweep's JSON, Markdown and plots here")
+    ap.add_argument("--only", choices=list(FIGURES), help="regenerate this figure set only")
+    ap.add_argument("--out", default=None, help="keep the sweeps' JSON, Markdown and plots here")
     a = ap.parse_args(argv)
-    ref, rows = bench.sweep(**SWEEP, repeat=3)
     out = Path(a.out) if a.out else Path(tempfile.mkdtemp(prefix="lgt-figures-"))
-    print(bench.write_report(out, SWEEP["spec"], ref, rows))
-    for name in ("error_vs_wall", "error_vs_nf"):
-        shutil.copyfile(out / f"heavy_top_{name}.png", HERE / f"heavy_top_{name}.png")
-        print(HERE / f"heavy_top_{name}.png")
+    out.mkdir(parents=True, exist_ok=True)
+    for name in [a.only] if a.only else FIGURES:
+        make(name, out)
     if not a.out:
         shutil.rmtree(out)
 
