@@ -39,6 +39,8 @@ _DPSI = {("SE3", "exp"): _se3._dexp, ("SE3", "cay"): _se3._dcay,
          ("SO3", "exp"): _so3._dexp, ("SO3", "cay"): _so3._dcay}
 
 SPARSE_MIN = 200        # unknowns above which the iteration matrix is factored sparse
+DENSE_MAX = 64          # unknowns up to which it is assembled and factored dense (scipy.sparse's
+                        # per-call overhead, ~0.5 ms a matrix, would dominate a small model's step)
 BLOCK_MAX = 12          # independent diagonal blocks up to this size are inverted explicitly
 
 
@@ -54,9 +56,15 @@ def coo(X):
 
 
 def csr(shape, parts):
-    """One scipy.sparse CSR matrix from COO triples (duplicates summed)."""
-    from scipy import sparse
+    """One matrix from COO triples (duplicates summed): scipy.sparse CSR, or a dense array
+    up to DENSE_MAX rows."""
     parts = [p for p in parts if len(p[0])]
+    if shape[0] <= DENSE_MAX:
+        out = np.zeros(shape)
+        for r, c, v in parts:
+            np.add.at(out, (r, c), v)
+        return out
+    from scipy import sparse
     if not parts:
         return sparse.csr_matrix(shape)
     r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
@@ -170,10 +178,12 @@ def factorize(J, L=None):
     A J that falls apart into independent blocks of at most BLOCK_MAX unknowns (bodies
     that do not interact) is inverted block by block and J⁻¹L applied as one sparse
     product (a sparse triangular solve costs more than that); otherwise sparse LU above
-    SPARSE_MIN unknowns, dense LU below. Raises np.linalg.LinAlgError or RuntimeError on
+    SPARSE_MIN unknowns, dense LU below; a dense J of at most DENSE_MAX unknowns goes straight
+    to dense LU (and J⁻¹L is formed once). Raises np.linalg.LinAlgError or RuntimeError on
     a singular J."""
     from scipy import sparse
-    S = _block_inverse(sparse.csr_matrix(J), L)
+    dense = not sparse.issparse(J) and J.shape[0] <= DENSE_MAX
+    S = None if dense else _block_inverse(sparse.csr_matrix(J), L)
     if S is not None:
         return S.__matmul__
     if J.shape[0] > SPARSE_MIN:
