@@ -202,6 +202,8 @@ def pose_errors(model, q, q_ref):
     vq = list(model.layout.vector_q)
     if vq:
         e_pos = max(e_pos, float(np.abs(q[vq] - q_ref[vq]).max()))
+    for c, s in model.layout.circle_q:               # planar rotations: the angle between them
+        e_rot = max(e_rot, abs(float(np.arctan2(q[s] * q_ref[c] - q[c] * q_ref[s], q[c] * q_ref[c] + q[s] * q_ref[s]))))
     return e_rot, e_pos
 
 

@@ -183,3 +183,14 @@ def to_group_twist(q, V, param="quat", group="SE3"):
 def from_group_twist(q, V, param="quat", group="SE3"):
     """The group's twist -> model twist (ω, ṙ): ṙ = R u on SE(3)."""
     return _convert_twist(q, V, param, group, to_group=False)
+
+
+def circle_tau(cs, x):
+    """(c, s) · exp(i x) for rows (c, s) = (cos θ, sin θ): the unit complex number of θ + x.
+    Written as cs + (cs (cos x - 1) + i cs sin x) with cos x - 1 = -2 sin²(x/2), so the
+    norm does not drift step after step (the quaternions' rule in :mod:`lgt_bridge.lgt`)."""
+    cs = np.asarray(cs, float)
+    x = np.asarray(x, float)
+    cm1, sn = -2.0 * np.sin(0.5 * x) ** 2, np.sin(x)
+    c, s = cs[..., 0], cs[..., 1]
+    return np.stack([c + (c * cm1 - s * sn), s + (s * cm1 + c * sn)], axis=-1)

@@ -5,6 +5,9 @@ A model holds absolute coordinates ``q`` (the engine's own) and velocities ``V``
 * each rigid body i owns 3 position entries and ν_i - 3 rotation entries of q
   (:class:`RigidBody`), and 6 entries of V: its twist (ω_i in the body frame,
   ṙ_i in the inertial frame), angular first;
+* a unit complex number (cos θ, sin θ) (``circle_q``, a planar rotation: Pinocchio's
+  continuous joints) owns 2 entries of q and 1 of V, its rate θ̇; it is stepped on SO(2),
+  q = q_k · exp(iX) (abelian: the exponential chart is global and dψ⁻¹ = 1);
 * every other coordinate is a vector-space block: q̇ = v, entry by entry.
 
 ``f(q, V, t)`` returns dV/dt (ω̇ body, r̈ inertial, v̇), index-1: constraint
@@ -60,9 +63,14 @@ class RigidBody:
         return self.param.validate(q[[*self.pos, *self.rot]], name)
 
 
+#: how far |(cos θ, sin θ)| of a circle coordinate may be from 1 in a given state
+CIRCLE_NORM_TOL = 1e-6
+
+
 @dataclass
 class Layout:
-    """Rigid bodies and vector-space coordinates of a model's q and V."""
+    """Rigid bodies, vector-space coordinates and unit complex numbers (SO(2)) of a
+    model's q and V."""
 
     nq: int
     nv: int
@@ -70,15 +78,23 @@ class Layout:
     vector_q: tuple = ()     # indices into q of vector-space coordinates
     vector_v: tuple = ()     # their rates, same length and order, indices into V
     names: list = field(default_factory=list)
+    circle_q: tuple = ()     # (cos, sin) index pairs into q of unit complex numbers
+    circle_v: tuple = ()     # their angular rates, same order, indices into V
 
     def __post_init__(self):
         self.vector_q = tuple(int(i) for i in self.vector_q)
         self.vector_v = tuple(int(i) for i in self.vector_v)
+        self.circle_q = tuple((int(c), int(s)) for c, s in self.circle_q)
+        self.circle_v = tuple(int(i) for i in self.circle_v)
         if len(self.vector_q) != len(self.vector_v):
             raise InputError(f"layout: {len(self.vector_q)} vector-space coordinates but "
                              f"{len(self.vector_v)} rates; give one rate per coordinate.")
-        used_q = [i for b in self.bodies for i in (*b.pos, *b.rot)] + list(self.vector_q)
-        used_v = [i for b in self.bodies for i in b.twist] + list(self.vector_v)
+        if len(self.circle_q) != len(self.circle_v):
+            raise InputError(f"layout: {len(self.circle_q)} unit complex (circle) coordinates but "
+                             f"{len(self.circle_v)} rates; give one angular rate per (cos, sin) pair.")
+        used_q = ([i for b in self.bodies for i in (*b.pos, *b.rot)] + list(self.vector_q)
+                  + [i for pair in self.circle_q for i in pair])
+        used_v = [i for b in self.bodies for i in b.twist] + list(self.vector_v) + list(self.circle_v)
         for what, used, n in (("q", used_q, self.nq), ("V", used_v, self.nv)):
             if sorted(used) != list(range(n)):
                 missing = sorted(set(range(n)) - set(used))
@@ -95,7 +111,19 @@ class Layout:
         for k, b in enumerate(self.bodies):
             if index in ((*b.pos, *b.rot) if kind == "q" else b.twist):
                 return f"body {k}" + (f" ({b.name})" if b.name else "")
+        for k, (pair, v) in enumerate(zip(self.circle_q, self.circle_v)):
+            if index in (pair if kind == "q" else (v,)):
+                return f"{kind}[{index}] (circle coordinate {k}: q[{pair[0]}], q[{pair[1]}] = cos θ, sin θ)"
         return f"{kind}[{index}] (vector-space coordinate)"
+
+    def validate_circles(self, q, name):
+        """InputError when a circle coordinate (cos θ, sin θ) of q is not finite or not of
+        unit norm (within CIRCLE_NORM_TOL)."""
+        for k, (c, s) in enumerate(self.circle_q):
+            r = float(np.hypot(q[c], q[s]))
+            if not abs(r - 1.0) <= CIRCLE_NORM_TOL:
+                raise InputError(f"{name}: {self.owner('q', c)} is ({q[c]!r}, {q[s]!r}) with norm {r:.12g}; "
+                                 "a planar rotation needs cos θ² + sin θ² = 1: give (cos θ, sin θ).")
 
     @classmethod
     def stacked(cls, params, n_vector=0, names=None):

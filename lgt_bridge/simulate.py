@@ -92,6 +92,7 @@ def _check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_ste
 def _validate_bodies(lay, q0):
     """Every body's coordinates, batched per parameterization; on failure the body-by-body
     pass names the first bad body."""
+    lay.validate_circles(q0, "q0")
     groups = {}
     for b in lay.bodies:
         groups.setdefault((b.param.name, b.rotation_only), []).append(b)

@@ -114,8 +114,9 @@ def load_robot(name):
         jm = m.joints[j]
         if jm.nq != jm.nv:
             raise InputError(f"bench pinocchio_robot: robot {name!r} has joint {m.names[j]!r}, a {jm.shortname()} "
-                             f"(nq = {jm.nq}, nv = {jm.nv}: a URDF continuous joint); the robot scenes need "
-                             "joints with nq = nv after the free-flyer (revolute, prismatic).")
+                             f"(nq = {jm.nq}, nv = {jm.nv}: a URDF continuous joint); the robot scenes' user "
+                             "loops and PD controller need joints with nq = nv after the free-flyer (revolute, "
+                             "prismatic). PinocchioModel itself runs it: wrap the model and call simulate.")
     return m, np.array(robot.q0, float)
 
 

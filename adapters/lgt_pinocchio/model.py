@@ -4,9 +4,11 @@ q is Pinocchio's own configuration vector. Each free-flyer joint is a rigid body
 (position, then the quaternion in Pinocchio's ``x y z w`` order); its 6 entries of
 V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
 (v_lin body, ω body) with ṙ = R v_lin. A spherical joint is a rotation-only body
-(its quaternion, and ω, which is Pinocchio's joint velocity as is). Joints whose
-configuration space is a vector space (nq = nv: revolute, prismatic, translation)
-are vector-space blocks.
+(its quaternion, and ω, which is Pinocchio's joint velocity as is). Continuous joints
+(URDF ``continuous``: ``JointModelRUBX/Y/Z``, ``RevoluteUnboundedUnaligned``; q = (cos θ,
+sin θ), v = θ̇) are circle coordinates, stepped on SO(2). Joints whose configuration space
+is a vector space (nq = nv: revolute, prismatic, translation, universal, ellipsoid,
+helical) are vector-space blocks; a composite joint is split into its components.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 
 Constraints (RigidConstraintModel, 3-D/6-D, to the world or loop closures): f from
@@ -22,12 +24,20 @@ import numpy as np
 
 from lgt_bridge import backend as _backend
 from lgt_bridge import lgt as _lgt
+from lgt_bridge.lgt import circle_tau
 from lgt_bridge import params
 from lgt_bridge.errors import InputError
 from lgt_bridge.groups import quaternion as _q
 from lgt_bridge.groups._vec import cross
 from lgt_bridge.model import Layout, Model, RigidBody
 
+#: continuous joints: q = (cos θ, sin θ), v = θ̇ (SO(2))
+CIRCLE_JOINTS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned")
+#: joints Pinocchio steps as vector spaces (q̇ = v) that still have no τ of their own here
+NOT_YET = {"JointModelSphericalZYX": "its three angles are singular at cos(y) = 0 and lgt_bridge has no "
+                                     "ZYX chart yet",
+           "JointModelPlanar": "SE(2) (x, y, cos θ, sin θ) is not supported yet",
+           "JointModelMimic": "a mimic joint has no coordinates of its own"}
 #: joints integrated as vector spaces (q̇ = v)
 VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX", "JointModelPY",
                  "JointModelPZ", "JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned",
@@ -36,6 +46,12 @@ VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX",
 
 _F64 = np.dtype(np.float64)
 _K = None           # lgt_pinocchio.kernels (imports numba), loaded by the first compiled model
+
+
+def _simple_joint(name, iq, iv, nq, nv):
+    """A joint stepped as circle or vector coordinates (not a rigid body, not refused)."""
+    return name in CIRCLE_JOINTS or name in VECTOR_JOINTS or (nq == nv and name not in NOT_YET and name not in (
+        "JointModelComposite", "JointModelFreeFlyer", "JointModelSpherical"))
 
 
 def _pin():
@@ -134,13 +150,33 @@ class PinocchioModel(Model):
         _check_pin_model(pin, model)
         self.compiled = _backend.compiled(backend)
         self.model, self.data = model, model.createData()
-        bodies, vq, vv = [], [], []
+        bodies, vq, vv, cq, cv = [], [], [], [], []
         self.roots, self.balls = [], []
         for j, jm in enumerate(model.joints):
             if j == 0:
                 continue
             name, iq, iv = jm.shortname(), jm.idx_q, jm.idx_v
-            if name == "JointModelFreeFlyer":
+            parts = [(name, iq, iv, jm.nq, jm.nv)]
+            if name == "JointModelComposite":
+                comps = jm.extract().joints
+                # components carry the model's indices once the composite is in a model
+                oq, ov = (0, 0) if comps[0].idx_q == iq and comps[0].idx_v == iv else (iq, iv)
+                parts = [(c.shortname(), oq + c.idx_q, ov + c.idx_v, c.nq, c.nv) for c in comps]
+                bad = [p[0] for p in parts if not _simple_joint(*p)]
+                if bad:
+                    raise InputError(f"Pinocchio joint {j} ({model.names[j]!r}) is a composite joint with a "
+                                     f"{bad[0]} component; lgt_bridge splits composite joints into revolute, "
+                                     "prismatic, continuous and other vector-space components only. Build "
+                                     "that component as a joint of its own (a body of zero mass between).")
+            if all(_simple_joint(*p) for p in parts):
+                for cname, ciq, civ, cnq, cnv in parts:
+                    if cname in CIRCLE_JOINTS:
+                        cq.append((ciq, ciq + 1))
+                        cv.append(civ)
+                    else:
+                        vq += list(range(ciq, ciq + cnq))
+                        vv += list(range(civ, civ + cnv))
+            elif name == "JointModelFreeFlyer":
                 bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
                                         tuple(range(iv, iv + 6)), model.names[j]))
                 self.roots.append((iq, iv))
@@ -149,16 +185,15 @@ class PinocchioModel(Model):
                 bodies.append(RigidBody(params.QUAT_XYZW, (), tuple(range(iq, iq + 4)),
                                         tuple(range(iv, iv + 3)), model.names[j]))
                 self.balls.append((iq, iv))
-            elif name in VECTOR_JOINTS or (jm.nq == jm.nv and name not in ("JointModelSphericalZYX",
-                                                                            "JointModelComposite")):
-                vq += list(range(iq, iq + jm.nq))
-                vv += list(range(iv, iv + jm.nv))
             else:
+                why = NOT_YET.get(name, "it is not a joint type lgt_bridge knows")
                 raise InputError(f"Pinocchio joint {j} ({model.names[j]!r}) is a {name} (nq = {jm.nq}, "
-                                 f"nv = {jm.nv}); lgt_bridge supports free-flyers, spherical joints and "
-                                 f"joints whose configuration space is a vector space "
-                                 f"({', '.join(VECTOR_JOINTS[:6])}, ...).")
-        self.layout = Layout(model.nq, model.nv, bodies, tuple(vq), tuple(vv))
+                                 f"nv = {jm.nv}): {why}. lgt_bridge supports free-flyers, spherical joints, "
+                                 "continuous joints (RUBX/Y/Z), composite joints of those, and joints whose "
+                                 f"configuration space is a vector space ({', '.join(VECTOR_JOINTS[:6])}, ...). "
+                                 "Integrate this model with Pinocchio's own loop, or replace the joint.")
+        self.layout = Layout(model.nq, model.nv, bodies, tuple(vq), tuple(vv), circle_q=tuple(cq),
+                             circle_v=tuple(cv))
         self.nq, self.nv = model.nq, model.nv
         self._riq = np.array([r[0] for r in self.roots], int)
         self._riv = np.array([r[1] for r in self.roots], int)
@@ -190,6 +225,11 @@ class PinocchioModel(Model):
                                  "finite initial state.")
         for b in bodies:
             b.validate(q0, f"q0 of joint {b.name!r}")
+        for c, _ in cq:
+            if abs(np.hypot(q0[c], q0[c + 1]) - 1.0) > 1e-6:
+                raise InputError(f"q0: {self.joint_of('q', c)} is a continuous joint whose (cos θ, sin θ) = "
+                                 f"({q0[c]!r}, {q0[c + 1]!r}) is not of unit norm; give (cos θ, sin θ) "
+                                 "(pin.neutral(model) and pin.randomConfiguration(model) do).")
         self.q0 = q0
         self.V0 = self.twist_from_v(q0, v0)
         self._move = _lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
@@ -450,6 +490,9 @@ class PinocchioModel(Model):
             out[iq:iq + 4] = mb.tau_pose(mb.base(q[iq:iq + 4][None]), d[iv:iv + 3][None])[0][0]
         vq = list(self.layout.vector_q)
         out[vq] = q[vq] + d[list(self.layout.vector_v)]
+        if self.layout.circle_q:
+            cq = np.array(self.layout.circle_q)
+            out[cq] = circle_tau(q[cq], d[list(self.layout.circle_v)])
         return out
 
     # finite-difference references of A and γ (tests hold the analytic ones to them)

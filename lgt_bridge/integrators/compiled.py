@@ -24,7 +24,11 @@ class CompiledProblem(LocalProblem):
     def __init__(self, model, group="SE3", chart="exp"):
         super().__init__(model, group, chart)
         self.bt = _k.body_table(self.sets, PARAM_CODES)
-        self.vt = np.stack([self.vq, self.vv, self.vx], axis=1).astype(np.int64).reshape(-1, 3)
+        # rows (iq, iv, ix, iq_sin): iq_sin = -1 for a vector coordinate, else the sin entry
+        # of a circle coordinate whose cos entry is iq
+        vec = np.stack([self.vq, self.vv, self.vx, np.full(len(self.vq), -1)], axis=1)
+        circ = np.stack([self.cq[:, 0], self.cv, self.cx, self.cq[:, 1]], axis=1)
+        self.vt = np.ascontiguousarray(np.concatenate([vec.reshape(-1, 4), circ.reshape(-1, 4)]), np.int64)
         nb, nq = len(self.bt), self.layout.nq
         self.off, size = _k.work_layout(self.nX, self.nv, nq, nb)
         self.work = np.zeros(size)

@@ -106,7 +106,8 @@ class Kinematics:
         self.prob = prob
         self.dpsi = [_DPSI[("SO3" if s.rot_only else "SE3" if s.se3 else "SO3xR3",
                             "cay" if s.cay else "exp")] for s in prob.sets]
-        self.vector_v = np.array(prob.layout.vector_v, int)
+        # vector and circle coordinates: dψ = 1 (circles: SO(2) is abelian)
+        self.vector_v = np.array(prob.layout.vector_v + prob.layout.circle_v, int)
         self.wlin = [s.wlin for s in prob.sets if s.se3]
 
     def rotations(self, quats):

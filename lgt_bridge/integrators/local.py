@@ -2,17 +2,20 @@
 
 For a step from (q_k, W_k) the state is (X, W): X the local coordinates of every
 rigid body (6 each, in its group's chart) followed by the increments of the
-vector-space coordinates; W the velocities in the integrator's representation:
-per rigid body (ω, Rᵀṙ) on SE(3), (ω, ṙ) on SO(3)xR³; vector rates unchanged.
+vector-space coordinates and the angle increments of the circle (SO(2)) coordinates;
+W the velocities in the integrator's representation: per rigid body (ω, Rᵀṙ) on SE(3),
+(ω, ṙ) on SO(3)xR³; vector and circle rates unchanged.
 
     q(X)  = τ(q_k, X)                                   per body, batched per (α, G, ψ)
-    Ẋ     = dψ⁻¹_{-X}(W)  (bodies),   v (vector coordinates)
+            (c, s) = (c_k, s_k) · exp(i X)              circles (SO(2), abelian)
+    Ẋ     = dψ⁻¹_{-X}(W)  (bodies),   v (vector and circle coordinates)
     Ẇ     = f(q, V, t)  with  V = (ω, R u) on SE(3)  and  d/dt(Rᵀṙ) = Rᵀr̈ - ω × Rᵀṙ
 """
 import numpy as np
 
 from .. import backend as _backend
 from .. import lgt as _lgt
+from ..lgt import circle_tau
 from ..errors import InputError
 from ..groups import quaternion as _q
 from ..groups._vec import cross
@@ -83,8 +86,11 @@ class LocalProblem:
         self.sets = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay, xoff) for (_, g, c, _), ids in keys.items()]
         self.vq = np.array(lay.vector_q, int)
         self.vv = np.array(lay.vector_v, int)
-        self.nX = int(xoff[-1]) + len(self.vq)
         self.vx = int(xoff[-1]) + np.arange(len(self.vq))
+        self.cq = np.array(lay.circle_q, int).reshape(-1, 2)
+        self.cv = np.array(lay.circle_v, int)
+        self.cx = int(xoff[-1]) + len(self.vq) + np.arange(len(self.cv))
+        self.nX = int(xoff[-1]) + len(self.vq) + len(self.cv)
         self.nv = lay.nv
         self.n_f = 0
         self.cay_rows = np.concatenate([s.xidx[:, :3] for s in self.sets if s.cay] or [np.zeros((0, 3), int)])
@@ -123,6 +129,8 @@ class LocalProblem:
             quats.append(p)
         if len(self.vq):
             q[self.vq] = self.q_k[self.vq] + X[self.vx]
+        if len(self.cv):
+            q[self.cq] = circle_tau(self.q_k[self.cq], X[self.cx])
         return q, quats
 
     def model_velocity(self, W, quats):
@@ -163,6 +171,8 @@ class LocalProblem:
             Xd[s.xidx] = s.lgt.rates(X[s.xidx], W[s.vidx])
         if len(self.vq):
             Xd[self.vx] = W[self.vv]
+        if len(self.cv):
+            Xd[self.cx] = W[self.cv]
         return Xd
 
     def rhs(self, X, W, t, at_start=False):
@@ -255,6 +265,8 @@ class LocalProblem:
             X[s.xidx] = d[s.vidx]
         if len(self.vq):
             X[self.vx] = d[self.vv]
+        if len(self.cv):
+            X[self.cx] = d[self.cv]
         return X
 
     def max_cayley(self, X):

@@ -1,7 +1,9 @@
 """Stage kernels of the explicit steppers, over every body of a model in one call.
 
 A model's bodies are described by an int64 table ``bt`` (one row per rigid body, see
-:func:`body_table`) and its vector-space coordinates by ``vt`` (rows ``(iq, iv, ix)``).
+:func:`body_table`) and its vector-space and circle coordinates by ``vt`` (rows
+``(iq, iv, ix, js)``: js = -1 for a vector coordinate, q[iq] += X[ix]; else the sin entry of a
+circle coordinate, (q[iq], q[js]) = (c, s) exp(i X[ix])).
 One stage of an RKMK method is
 
     stage_state:       X = h Σ a_j KX_j,  W = W_0 + h Σ a_j KW_j,  q = τ(q_k, X),
@@ -184,8 +186,16 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
             V[j0], V[j1], V[j2] = u0, u1, u2
             Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = u0, u1, u2
     for k in range(vt.shape[0]):
-        iq, iv, ix = vt[k, 0], vt[k, 1], vt[k, 2]
-        q[iq] = qk[iq] + X[ix]
+        iq, iv, ix, js = vt[k, 0], vt[k, 1], vt[k, 2], vt[k, 3]
+        if js < 0:
+            q[iq] = qk[iq] + X[ix]
+        else:                                   # circle: (c, s) exp(i x), no norm drift
+            x = X[ix]
+            sh = math.sin(0.5 * x)
+            cm1, sn = -2.0 * sh * sh, math.sin(x)
+            c, s = qk[iq], qk[js]
+            q[iq] = c + (c * cm1 - s * sn)
+            q[js] = s + (s * cm1 + c * sn)
         V[iv] = W[iv]
         Xd[ix] = W[iv]
     return cmax

@@ -1,0 +1,270 @@
+"""Pinocchio joint types beyond free-flyers, spherical and revolute joints: continuous joints
+(URDF ``continuous``: RUBX/Y/Z and RevoluteUnboundedUnaligned, q = (cos θ, sin θ), stepped on
+SO(2) as circle coordinates), unaligned, translation, universal, ellipsoid and helical joints
+(vector spaces) and composite joints (split into their components). Each model is checked
+against an independent reference on Pinocchio's own (q, v): scipy's DOP853 at 1e-12 with
+q̇ = d/dε pin.integrate(q, ε v) (4th-order central difference) and q renormalized by pin.normalize,
+none of which touches lgt_bridge's circle or τ code."""
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lgt_bridge.errors import InputError
+from lgt_bridge.lgt import circle_tau
+from lgt_bridge.model import Layout
+from lgt_bridge.simulate import simulate
+
+pin = pytest.importorskip("pinocchio")
+
+from lgt_pinocchio import PinocchioModel  # noqa: E402
+
+PLACEMENT = pin.SE3(pin.utils.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.05, 0.15, -0.1]))
+
+
+# --- SO(2): the defining identities of circle_tau -------------------------------------------
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-10, 10), st.floats(-10, 10))
+def test_circle_tau_is_the_rotation_by_the_increment(theta, x):
+    got = circle_tau(np.array([np.cos(theta), np.sin(theta)]), x)
+    np.testing.assert_allclose(got, [np.cos(theta + x), np.sin(theta + x)], atol=4e-15)
+
+
+def test_circle_tau_keeps_unit_norm_over_many_updates():
+    """10⁵ steady increments (where a plain cos/sin product accumulates its rounding):
+    the norm stays within 1e-13 of 1 and the angle within 1e-9 of the sum."""
+    cs = np.array([[1.0, 0.0]])
+    x = 2.0 * np.pi / 977.0 + 1e-3
+    for _ in range(100_000):
+        cs = circle_tau(cs, np.array([x]))
+    assert abs(np.hypot(*cs[0]) - 1.0) < 1e-13
+    ang = np.angle(np.exp(1j * 100_000 * x) * np.conj(cs[0, 0] + 1j * cs[0, 1]))
+    assert abs(ang) < 1e-9
+
+
+def test_layout_checks_circle_coordinates():
+    with pytest.raises(InputError, match="circle"):
+        Layout(2, 2, [], circle_q=((0, 1),), circle_v=())
+    with pytest.raises(InputError, match="covered exactly once"):
+        Layout(3, 1, [], circle_q=((0, 1),), circle_v=(0,))
+    lay = Layout(2, 1, [], circle_q=((0, 1),), circle_v=(0,))
+    with pytest.raises(InputError, match="cos θ² \\+ sin θ² = 1"):
+        lay.validate_circles(np.array([1.0, 0.5]), "q0")
+
+
+# --- models ---------------------------------------------------------------------------------
+def _chain(joints, root=None):
+    m = pin.Model()
+    parent = 0
+    rng = np.random.default_rng(11)
+    for k, jm in enumerate(([root] if root is not None else []) + list(joints)):
+        parent = m.addJoint(parent, jm, PLACEMENT, f"j{k}")
+        I = pin.Inertia(0.5 + rng.random(), rng.normal(size=3) * 0.1,
+                        np.diag(0.05 + 0.05 * rng.random(3)) + 0.01 * np.eye(3))
+        m.appendBodyToJoint(parent, I, pin.SE3.Identity())
+    return m
+
+
+def every_joint():
+    """A floating chain with every joint type the adapter steps besides free-flyers."""
+    axis = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
+    comp = pin.JointModelComposite()
+    comp.addJoint(pin.JointModelRX())
+    comp.addJoint(pin.JointModelRUBY(), PLACEMENT)
+    comp.addJoint(pin.JointModelPZ())
+    joints = [pin.JointModelRUBX(), pin.JointModelRUBY(), pin.JointModelRUBZ(),
+              pin.JointModelRevoluteUnboundedUnaligned(), pin.JointModelRevoluteUnaligned(axis),
+              pin.JointModelPrismaticUnaligned(axis), pin.JointModelTranslation(),
+              pin.JointModelUniversal(np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
+              pin.JointModelEllipsoid(0.1, 0.2, 0.3), pin.JointModelHX(0.05),
+              pin.JointModelSpherical(), comp]
+    return _chain(joints, root=pin.JointModelFreeFlyer())
+
+
+ARM_URDF = """<?xml version="1.0"?>
+<robot name="pr2_like_arm">
+  <link name="base"><inertial><mass value="5"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="torso"><inertial><origin xyz="0 0 0.2"/><mass value="3"/><inertia ixx="0.05" iyy="0.06" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="shoulder"><inertial><origin xyz="0.1 0 0"/><mass value="2"/><inertia ixx="0.02" iyy="0.03" izz="0.02" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
+  <link name="upper_arm"><inertial><origin xyz="0.2 0 0"/><mass value="1.5"/><inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="forearm"><inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia ixx="0.005" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="wrist"><inertial><origin xyz="0 0.02 0"/><mass value="0.4"/><inertia ixx="0.002" iyy="0.001" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="torso_lift" type="prismatic"><parent link="base"/><child link="torso"/><axis xyz="0 0 1"/><limit lower="0" upper="0.3" effort="100" velocity="1"/></joint>
+  <joint name="shoulder_pan" type="revolute"><parent link="torso"/><child link="shoulder"/><origin xyz="0 0.2 0.4"/><axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="10" velocity="3"/></joint>
+  <joint name="upper_arm_roll" type="continuous"><parent link="shoulder"/><child link="upper_arm"/><origin xyz="0.1 0 0"/><axis xyz="1 0 0"/></joint>
+  <joint name="forearm_roll" type="continuous"><parent link="upper_arm"/><child link="forearm"/><origin xyz="0.4 0 0" rpy="0 0.3 0"/><axis xyz="1 0 0"/></joint>
+  <joint name="wrist_roll" type="continuous"><parent link="forearm"/><child link="wrist"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/></joint>
+</robot>"""
+
+
+def pr2_like(free=False):
+    return pin.buildModelFromXML(ARM_URDF, pin.JointModelFreeFlyer()) if free else pin.buildModelFromXML(ARM_URDF)
+
+
+def start(m, seed=3):
+    rng = np.random.default_rng(seed)
+    pin.seed(seed)                                  # randomConfiguration draws from Pinocchio's own RNG
+    lo = np.where(np.isfinite(m.lowerPositionLimit), m.lowerPositionLimit, -1.0).clip(-1, 1)
+    hi = np.where(np.isfinite(m.upperPositionLimit), m.upperPositionLimit, 1.0).clip(-1, 1)
+    return pin.randomConfiguration(m, lo, hi), rng.normal(size=m.nv)
+
+
+def reference(m, q0, v0, T, tau=None):
+    """Pinocchio's own (q, v) at T: DOP853 at 1e-12 on (q, v), q̇ by central differences of
+    pin.integrate along v, q renormalized by pin.normalize at every evaluation."""
+    from scipy.integrate import solve_ivp
+    d = m.createData()
+    zero = np.zeros(m.nv)
+
+    def rhs(t, y):
+        q, v = pin.normalize(m, y[:m.nq]), y[m.nq:]
+        speed = np.linalg.norm(v)
+        qd = np.zeros(m.nq)
+        if speed > 0.0:       # 4th-order central difference along the unit direction: ~1e-13
+            u, e = v / speed, 1e-3
+            step = [pin.integrate(m, q, k * e * u) for k in (-2, -1, 1, 2)]
+            qd = speed * (step[0] - 8.0 * step[1] + 8.0 * step[2] - step[3]) / (12.0 * e)
+        return np.concatenate([qd, pin.aba(m, d, q, v, zero if tau is None else tau(t, q, v))])
+    s = solve_ivp(rhs, (0.0, T), np.concatenate([q0, v0]), method="DOP853", rtol=1e-12, atol=1e-12)
+    assert s.status == 0
+    return pin.normalize(m, s.y[:m.nq, -1]), s.y[m.nq:, -1]
+
+
+def gap(m, pm, r, ref):
+    """Largest difference from the reference in Pinocchio's tangent space (q) and in v."""
+    q, v = pm.pin_state(r.q[-1], r.V[-1])
+    return float(np.abs(pin.difference(m, ref[0], q)).max()), float(np.abs(v - ref[1]).max())
+
+
+MODELS = {"every_joint": every_joint, "pr2_like_arm": pr2_like, "pr2_like_floating": lambda: pr2_like(True)}
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_models_wrap_with_circle_coordinates(name):
+    m = MODELS[name]()
+    pm = PinocchioModel(m, q0=start(m)[0])
+    n_cont = sum(j.shortname() in ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ",
+                                   "JointModelRevoluteUnboundedUnaligned") for j in m.joints)
+    n_comp = sum(1 for j in m.joints if j.shortname() == "JointModelComposite")    # one RUBY inside
+    assert len(pm.layout.circle_q) == n_cont + n_comp
+    for (c, s), v in zip(pm.layout.circle_q, pm.layout.circle_v):
+        assert s == c + 1 and 0 <= v < m.nv
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_agrees_with_the_independent_reference(name, group):
+    m = MODELS[name]()
+    q0, v0 = start(m)
+    T = 0.5
+    ref = reference(m, q0, v0, T)
+    pm = PinocchioModel(m, q0=q0, v0=v0)
+    r = simulate(pm, (0.0, T), method="dop853", group=group, chart="exp", rtol=1e-12, atol=1e-12)
+    assert r.success, r.message
+    dq, dv = gap(m, pm, r, ref)
+    assert dq < 1e-8 and dv < 1e-8 * max(1.0, np.abs(ref[1]).max())
+    for c, s in pm.layout.circle_q:                   # stepped on SO(2): unit to round-off
+        assert abs(np.hypot(r.q[-1, c], r.q[-1, s]) - 1.0) < 1e-14
+
+
+def test_rkmk4_converges_at_fourth_order_through_the_circles():
+    m = pr2_like()
+    q0, v0 = start(m, seed=5)
+    v0 = 4.0 * v0                                   # fast enough for errors well above the reference's
+    T = 0.4
+    ref = reference(m, q0, v0, T)
+    pm = PinocchioModel(m, q0=q0, v0=v0)
+    dts = [0.02, 0.01, 0.005]
+    errs = [gap(m, pm, simulate(pm, (0.0, T), method="rkmk4", dt=dt), ref)[0] for dt in dts]
+    slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
+    assert abs(slope - 4.0) < 0.3, (errs, slope)
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_genalpha_through_the_circles(group):
+    """Generalized-α on the analytic matrix (RNEA derivatives): second order in q against
+    the reference, under a PD torque on every actuated coordinate."""
+    m = pr2_like(free=True)
+    q0, v0 = start(m, seed=7)
+    qref = q0.copy()
+
+    def tau(t, q, v):
+        out = -2.0 * v
+        out[6:] += 20.0 * pin.difference(m, q, qref)[6:]
+        return out
+    T = 0.3
+    ref = reference(m, q0, v0, T, tau)
+    pm = PinocchioModel(m, q0=q0, v0=v0, tau=tau)
+    errs = []
+    for dt in (4e-3, 2e-3, 1e-3):
+        r = simulate(pm, (0.0, T), method="genalpha", group=group, dt=dt)
+        assert r.success, r.message
+        errs.append(gap(m, pm, r, ref)[0])
+    slope = np.polyfit(np.log([4e-3, 2e-3, 1e-3]), np.log(errs), 1)[0]
+    assert 1.7 < slope < 2.5, (errs, slope)
+
+
+@pytest.mark.parametrize("method", ["rkmk4", "dop853"])
+def test_numpy_and_compiled_backends_agree_on_circles(method, monkeypatch):
+    m = every_joint()
+    q0, v0 = start(m)
+    out = []
+    for backend in ("numpy", "numba"):
+        monkeypatch.setenv("LGT_BRIDGE_BACKEND", backend)
+        pm = PinocchioModel(m, q0=q0, v0=v0, backend=backend)
+        kw = dict(dt=5e-3) if method == "rkmk4" else dict(rtol=1e-9, atol=1e-9)
+        r = simulate(pm, (0.0, 0.2), method=method, group="SE3", **kw)
+        out.append(r)
+    assert out[0].stats["n_f"] == out[1].stats["n_f"]
+    # dop853's step sizes follow its error estimate, a difference of two solutions whose last
+    # bits differ between backends (measured: step ends 2e-10 apart): compare where both end
+    rows = slice(None) if method == "rkmk4" else slice(-1, None)
+    np.testing.assert_allclose(out[1].q[rows], out[0].q[rows], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[1].V[rows], out[0].V[rows], rtol=0, atol=1e-11 * np.abs(out[0].V).max())
+
+
+# --- refused, with a clear message ------------------------------------------------------------
+def test_non_unit_continuous_joint_is_refused_naming_it():
+    m = pr2_like()
+    q0 = pin.neutral(m)
+    c = m.joints[m.getJointId("forearm_roll")].idx_q
+    q0[c:c + 2] = [1.0, 0.3]
+    with pytest.raises(InputError, match="forearm_roll.*unit norm"):
+        PinocchioModel(m, q0=q0)
+
+
+@pytest.mark.parametrize("joint, words", [
+    (lambda: pin.JointModelSphericalZYX(), "ZYX"),
+    (lambda: pin.JointModelPlanar(), "SE\\(2\\)"),
+])
+def test_joints_not_supported_yet_are_refused_with_the_reason(joint, words):
+    m = _chain([pin.JointModelRX(), joint()])
+    with pytest.raises(InputError, match=words):
+        PinocchioModel(m)
+
+
+def test_composite_with_a_spherical_component_is_refused():
+    comp = pin.JointModelComposite()
+    comp.addJoint(pin.JointModelRX())
+    comp.addJoint(pin.JointModelSpherical())
+    with pytest.raises(InputError, match="composite joint with a JointModelSpherical component"):
+        PinocchioModel(_chain([comp]))
+
+
+def test_pr2_from_the_loaders():
+    """PR2 as example-robot-data loads it (fixed base, URDF continuous joints) runs and agrees
+    with the reference (skipped only without the loaders: pip install 'lgt-bridge[robots]')."""
+    erd = pytest.importorskip("example_robot_data", reason="example-robot-data-loaders not installed "
+                                                          "(pip install 'lgt-bridge[robots]')")
+    robot = erd.load("pr2")
+    m = robot.model
+    assert any(j.shortname().startswith("JointModelRUB") for j in m.joints)
+    q0 = np.array(robot.q0, float)
+    v0 = 0.3 * np.random.default_rng(1).normal(size=m.nv)
+    T = 0.05
+    ref = reference(m, q0, v0, T)
+    pm = PinocchioModel(m, q0=q0, v0=v0)
+    r = simulate(pm, (0.0, T), method="dop853", group="SO3xR3", rtol=1e-12, atol=1e-12)
+    assert r.success, r.message
+    dq, dv = gap(m, pm, r, ref)
+    assert dq < 1e-8 and dv < 1e-8 * max(1.0, np.abs(ref[1]).max())
