@@ -145,8 +145,8 @@ def test_bad_input():
     with pytest.raises(InputError, match="tau"):
         PinocchioModel(model, tau=np.zeros(5))
     h = pin.Model()
-    h.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "planar")
-    with pytest.raises(InputError, match="JointModelPlanar"):
+    h.addJoint(0, pin.JointModelSphericalZYX(), pin.SE3.Identity(), "zyx")
+    with pytest.raises(InputError, match="JointModelSphericalZYX"):
         PinocchioModel(h)
 
 

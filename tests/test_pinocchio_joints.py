@@ -1,7 +1,8 @@
 """Pinocchio joint types beyond free-flyers, spherical and revolute joints: continuous joints
 (URDF ``continuous``: RUBX/Y/Z and RevoluteUnboundedUnaligned, q = (cos θ, sin θ), stepped on
-SO(2) as circle coordinates), unaligned, translation, universal, ellipsoid and helical joints
-(vector spaces) and composite joints (split into their components). Each model is checked
+SO(2) as circle coordinates), planar joints (SO(2)×R², v_xy in the joint frame converted to the
+parent frame), unaligned, translation, universal, ellipsoid and helical joints (vector spaces)
+and composite joints (split into their components). Each model is checked
 against an independent reference on Pinocchio's own (q, v): scipy's DOP853 at 1e-12 with
 q̇ = d/dε pin.integrate(q, ε v) (4th-order central difference) and q renormalized by pin.normalize,
 none of which touches lgt_bridge's circle or τ code."""
@@ -77,8 +78,13 @@ def every_joint():
               pin.JointModelPrismaticUnaligned(axis), pin.JointModelTranslation(),
               pin.JointModelUniversal(np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
               pin.JointModelEllipsoid(0.1, 0.2, 0.3), pin.JointModelHX(0.05),
-              pin.JointModelSpherical(), comp]
+              pin.JointModelSpherical(), comp, pin.JointModelPlanar()]
     return _chain(joints, root=pin.JointModelFreeFlyer())
+
+
+def mobile_base():
+    """A planar mobile base (fixed to the world) carrying a continuous and a revolute joint."""
+    return _chain([pin.JointModelPlanar(), pin.JointModelRUBZ(), pin.JointModelRY()])
 
 
 ARM_URDF = """<?xml version="1.0"?>
@@ -136,7 +142,8 @@ def gap(m, pm, r, ref):
     return float(np.abs(pin.difference(m, ref[0], q)).max()), float(np.abs(v - ref[1]).max())
 
 
-MODELS = {"every_joint": every_joint, "pr2_like_arm": pr2_like, "pr2_like_floating": lambda: pr2_like(True)}
+MODELS = {"every_joint": every_joint, "pr2_like_arm": pr2_like, "pr2_like_floating": lambda: pr2_like(True),
+          "mobile_base": mobile_base}
 
 
 @pytest.mark.parametrize("name", list(MODELS))
@@ -146,7 +153,9 @@ def test_models_wrap_with_circle_coordinates(name):
     n_cont = sum(j.shortname() in ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ",
                                    "JointModelRevoluteUnboundedUnaligned") for j in m.joints)
     n_comp = sum(1 for j in m.joints if j.shortname() == "JointModelComposite")    # one RUBY inside
-    assert len(pm.layout.circle_q) == n_cont + n_comp
+    n_planar = sum(1 for j in m.joints if j.shortname() == "JointModelPlanar")
+    assert len(pm.layout.circle_q) == n_cont + n_comp + n_planar
+    assert len(pm.planars) == n_planar
     for (c, s), v in zip(pm.layout.circle_q, pm.layout.circle_v):
         assert s == c + 1 and 0 <= v < m.nv
 
@@ -233,22 +242,48 @@ def test_non_unit_continuous_joint_is_refused_naming_it():
         PinocchioModel(m, q0=q0)
 
 
-@pytest.mark.parametrize("joint, words", [
-    (lambda: pin.JointModelSphericalZYX(), "ZYX"),
-    (lambda: pin.JointModelPlanar(), "SE\\(2\\)"),
-])
-def test_joints_not_supported_yet_are_refused_with_the_reason(joint, words):
-    m = _chain([pin.JointModelRX(), joint()])
-    with pytest.raises(InputError, match=words):
-        PinocchioModel(m)
+def test_spherical_zyx_is_refused_with_the_reason():
+    with pytest.raises(InputError, match="ZYX"):
+        PinocchioModel(_chain([pin.JointModelRX(), pin.JointModelSphericalZYX()]))
 
 
-def test_composite_with_a_spherical_component_is_refused():
+@pytest.mark.parametrize("part", ["JointModelSpherical", "JointModelPlanar"])
+def test_composite_with_a_rigid_component_is_refused(part):
     comp = pin.JointModelComposite()
     comp.addJoint(pin.JointModelRX())
-    comp.addJoint(pin.JointModelSpherical())
-    with pytest.raises(InputError, match="composite joint with a JointModelSpherical component"):
+    comp.addJoint(getattr(pin, part)())
+    with pytest.raises(InputError, match=f"composite joint with a {part} component"):
         PinocchioModel(_chain([comp]))
+
+
+# --- planar joints: the velocity conversion and generalized-α's matrix --------------------------
+def test_planar_twist_is_the_parent_frame_velocity():
+    """V's (x, y) entries are d/dt of q's (x, y) (what the vector coordinates are stepped
+    with), checked against pin.integrate over a small time; V ↔ v round trip."""
+    m = mobile_base()
+    q0, v0 = start(m, seed=2)
+    pm = PinocchioModel(m, q0=q0, v0=v0)
+    (iq, iv), = pm.planars
+    h = 1e-6
+    rate = (pin.integrate(m, q0, h * v0) - pin.integrate(m, q0, -h * v0))[iq:iq + 2] / (2 * h)
+    np.testing.assert_allclose(pm.V0[iv:iv + 2], rate, rtol=1e-8)
+    np.testing.assert_allclose(pm.v_from_twist(q0, pm.V0), v0, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(pm._v_from_twist_numpy(q0, pm.V0), v0, rtol=1e-14, atol=1e-15)
+
+
+@pytest.mark.parametrize("at", ["solution", "any_acceleration"])
+def test_planar_iteration_matrix_against_differences_of_the_residual(at):
+    from test_pinocchio_constraints import rel, residual_fd
+    m = mobile_base()
+    q0, v0 = start(m, seed=4)
+    pm = PinocchioModel(m, q0=q0, v0=v0, tau=lambda t, q, v: -3.0 * v + np.sin(t))
+    V, t = pm.V0 * 2.0, 0.2
+    Vd = pm.f(q0, V, t) if at == "solution" else np.random.default_rng(1).normal(size=pm.nv)
+    kw = {} if at == "solution" else {"Vdot": Vd}
+    C = pm.iteration_matrix(q0, V, t, 0.0, 1.0, 0.0, **kw)
+    K = pm.iteration_matrix(q0, V, t, 0.0, 0.0, 1.0, **kw)
+    Cf, Kf = residual_fd(pm, q0, V, Vd, t)
+    assert rel(C, Cf) < 1e-6 and rel(K, Kf) < 1e-6
 
 
 def test_pr2_from_the_loaders():

@@ -6,9 +6,12 @@ V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
 (v_lin body, ω body) with ṙ = R v_lin. A spherical joint is a rotation-only body
 (its quaternion, and ω, which is Pinocchio's joint velocity as is). Continuous joints
 (URDF ``continuous``: ``JointModelRUBX/Y/Z``, ``RevoluteUnboundedUnaligned``; q = (cos θ,
-sin θ), v = θ̇) are circle coordinates, stepped on SO(2). Joints whose configuration space
-is a vector space (nq = nv: revolute, prismatic, translation, universal, ellipsoid,
-helical) are vector-space blocks; a composite joint is split into its components.
+sin θ), v = θ̇) are circle coordinates, stepped on SO(2). A planar joint (q = (x, y, cos θ,
+sin θ), v = (v_xy in the joint frame, ω)) is stepped on SO(2)×R²: its (x, y) are vector
+coordinates with rates ṗ = R(θ) v_xy in the parent frame, its (cos θ, sin θ) a circle
+coordinate with rate ω. Joints whose configuration space is a vector space (nq = nv:
+revolute, prismatic, translation, universal, ellipsoid, helical) are vector-space blocks;
+a composite joint is split into its components.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 
 Constraints (RigidConstraintModel, 3-D/6-D, to the world or loop closures): f from
@@ -36,7 +39,6 @@ CIRCLE_JOINTS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointMod
 #: joints Pinocchio steps as vector spaces (q̇ = v) that still have no τ of their own here
 NOT_YET = {"JointModelSphericalZYX": "its three angles are singular at cos(y) = 0 and lgt_bridge has no "
                                      "ZYX chart yet",
-           "JointModelPlanar": "SE(2) (x, y, cos θ, sin θ) is not supported yet",
            "JointModelMimic": "a mimic joint has no coordinates of its own"}
 #: joints integrated as vector spaces (q̇ = v)
 VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX", "JointModelPY",
@@ -46,6 +48,16 @@ VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX",
 
 _F64 = np.dtype(np.float64)
 _K = None           # lgt_pinocchio.kernels (imports numba), loaded by the first compiled model
+
+
+#: the planar rotation's generator: J v = (-v_y, v_x), R(θ) = exp(θ J)
+_J2 = np.array([[0.0, -1.0], [1.0, 0.0]])
+
+
+def _planar_R(q, iq):
+    """R(θ) of the planar joint whose q starts at iq: q[iq + 2], q[iq + 3] = cos θ, sin θ."""
+    c, s = q[iq + 2], q[iq + 3]
+    return np.array([[c, -s], [s, c]])
 
 
 def _simple_joint(name, iq, iv, nq, nv):
@@ -151,7 +163,7 @@ class PinocchioModel(Model):
         self.compiled = _backend.compiled(backend)
         self.model, self.data = model, model.createData()
         bodies, vq, vv, cq, cv = [], [], [], [], []
-        self.roots, self.balls = [], []
+        self.roots, self.balls, self.planars = [], [], []
         for j, jm in enumerate(model.joints):
             if j == 0:
                 continue
@@ -176,6 +188,13 @@ class PinocchioModel(Model):
                     else:
                         vq += list(range(ciq, ciq + cnq))
                         vv += list(range(civ, civ + cnv))
+            elif name == "JointModelPlanar":
+                # SO(2)xR²: (x, y) vector coordinates with rates ṗ (parent frame), (c, s) a circle
+                vq += [iq, iq + 1]
+                vv += [iv, iv + 1]
+                cq.append((iq + 2, iq + 3))
+                cv.append(iv + 2)
+                self.planars.append((iq, iv))
             elif name == "JointModelFreeFlyer":
                 bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
                                         tuple(range(iv, iv + 6)), model.names[j]))
@@ -197,6 +216,7 @@ class PinocchioModel(Model):
         self.nq, self.nv = model.nq, model.nv
         self._riq = np.array([r[0] for r in self.roots], int)
         self._riv = np.array([r[1] for r in self.roots], int)
+        self._convert = bool(self.roots or self.planars)     # V and v differ somewhere
         self._tau = tau
         if callable(tau):
             _check_signature(tau, "tau", "tau(t, q, v) returning the joint torques (size nv)")
@@ -236,7 +256,7 @@ class PinocchioModel(Model):
         self._move_ball = _lgt.RotationLGT(params.QUAT_XYZW, "exp")
         self._setup_constraints(constraints or [], fext)
         if self.compiled:
-            self._kW, self._kv = _kernels().pack(self.roots, self.nv)   # roots, v, quaternions
+            self._kW, self._kv = _kernels().pack(self.roots, self.nv, self.planars)   # roots, v, rotations
             self.f = self._f_compiled = self._build_f()
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
@@ -306,6 +326,8 @@ class PinocchioModel(Model):
             i = self._riv[:, None]
             v[i + np.arange(3)] = _q._rotate(_q._conj(p), V[i + np.arange(3, 6)])
             v[i + np.arange(3, 6)] = V[i + np.arange(3)]
+        for iq, iv in self.planars:
+            v[iv:iv + 2] = _planar_R(q, iq).T @ V[iv:iv + 2]
         return v
 
     def twist_from_v(self, q, v):
@@ -315,6 +337,8 @@ class PinocchioModel(Model):
             i = self._riv[:, None]
             V[i + np.arange(3)] = v[i + np.arange(3, 6)]
             V[i + np.arange(3, 6)] = _q._rotate(p, v[i + np.arange(3)])
+        for iq, iv in self.planars:
+            V[iv:iv + 2] = _planar_R(q, iq) @ v[iv:iv + 2]
         return V
 
     # --- inputs -------------------------------------------------------------------------------
@@ -416,6 +440,8 @@ class PinocchioModel(Model):
         for iq, iv in self.roots:
             A[:, iv:iv + 3] = G[:, iv + 3:iv + 6]
             A[:, iv + 3:iv + 6] = G[:, iv:iv + 3] @ _xyzw_matrix(*q[iq + 3:iq + 7]).T
+        for iq, iv in self.planars:
+            A[:, iv:iv + 2] = G[:, iv:iv + 2] @ _planar_R(q, iq).T
         return A
 
     def constraint_jacobian(self, q):
@@ -522,6 +548,8 @@ class PinocchioModel(Model):
                 T[iv:iv + 6, iv:iv + 6] = 0.0
                 T[iv:iv + 3, iv + 3:iv + 6] = R[k].T
                 T[iv + 3:iv + 6, iv:iv + 3] = np.eye(3)
+        for iq, iv in self.planars:
+            T[iv:iv + 2, iv:iv + 2] = _planar_R(q, iq).T
         return T
 
     def mass_matrix(self, q):
@@ -548,10 +576,12 @@ class PinocchioModel(Model):
 
     def _TdV(self, v):
         """Ṫ V: Pinocchio's acceleration at V̇ = 0, (-ω × v_lin, 0) on each free-flyer
-        (d/dt of Rᵀṙ at fixed ṙ), zero elsewhere."""
+        (d/dt of Rᵀṙ at fixed ṙ), (-ω J v_xy, 0) on each planar joint, zero elsewhere."""
         TdV = np.zeros(self.nv)
         for _, iv in self.roots:
             TdV[iv:iv + 3] = _cross3(v[iv:iv + 3], v[iv + 3:iv + 6])
+        for _, iv in self.planars:
+            TdV[iv:iv + 2] = -v[iv + 2] * (_J2 @ v[iv:iv + 2])
         return TdV
 
     # --- generalized-α: the iteration matrix ------------------------------------------------------
@@ -666,6 +696,15 @@ class PinocchioModel(Model):
                 Ea[lin, ang] = -Hw @ R[k].T
                 if r is not None:
                     dT[ang, lin] = -R[k] @ _hat(r[lin])                  # (Tᵀ r)_ṙ = R r_lin
+        for iq, iv in self.planars:
+            # planar: v_xy = R(θ)ᵀ ṗ and a_xy = R(θ)ᵀ p̈ - ω J v_xy turn with δθ (column iv + 2)
+            R2, xy, th = _planar_R(q, iq), slice(iv, iv + 2), iv + 2
+            Nv[xy, th] = -_J2 @ v[xy]
+            Na[xy, th] = -_J2 @ a[xy]
+            Ea[xy, xy] = -v[th] * (_J2 @ R2.T)
+            Ea[xy, th] = -_J2 @ v[xy]
+            if r is not None:
+                dT[xy, th] = R2 @ (_J2 @ r[xy])                          # (Tᵀ r)_ṗ = R r_xy
         Tt = T.T
         M = Tt @ Mp @ T
         C = Tt @ (dv @ T + Mp @ Ea)
@@ -702,7 +741,7 @@ class PinocchioModel(Model):
         pin, model, data = self.pin, self.model, self.data
         W = self._kW
         v_buf = W[self._kv]
-        has_roots = bool(self.roots)
+        has_roots = self._convert
         tau_c = np.zeros(self.nv) if self._tau is None else self._tau
         tau_call = callable(tau_c)
         nv_shape = (self.nv,)
@@ -783,6 +822,8 @@ class PinocchioModel(Model):
             vl, w = v[i + np.arange(3)], v[i + np.arange(3, 6)]
             Vd[i + np.arange(3)] = a[i + np.arange(3, 6)]
             Vd[i + np.arange(3, 6)] = _q._rotate(self._quats(q), a[i + np.arange(3)] + cross(w, vl))
+        for iq, iv in self.planars:
+            Vd[iv:iv + 2] = _planar_R(q, iq) @ (a[iv:iv + 2] + v[iv + 2] * _J2 @ v[iv:iv + 2])
         return Vd
 
     def pin_state(self, q, V):
