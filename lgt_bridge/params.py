@@ -6,7 +6,8 @@ Exudyn and Pinocchio store it, then the rotation parameters θ:
 * :class:`Quaternion` — unit quaternion, ν = 7, element order ``"wxyz"``
   (Exudyn's Euler parameters) or ``"xyzw"`` (Pinocchio), chosen per body;
 * :class:`RotationVector` — ν = 6 (Exudyn ``NodeRigidBodyRotVecLG``);
-* :class:`TaitBryanXYZ` — ν = 6, R = Rx(θ0) Ry(θ1) Rz(θ2) (Exudyn ``RotXYZ``).
+* :class:`TaitBryanXYZ` — ν = 6, R = Rx(θ0) Ry(θ1) Rz(θ2) (Exudyn ``RotXYZ``);
+* :class:`TaitBryanZYX` — ν = 6, R = Rz(θ0) Ry(θ1) Rx(θ2) (Pinocchio ``JointModelSphericalZYX``).
 
 ``from_quat`` is α⁻¹ on the rotation: it returns the branch continuous with the
 previous value (DESIGN.md): the quaternion sign with p·p_prev > 0; the rotation
@@ -279,19 +280,57 @@ class TaitBryanXYZ(Parameterization):
                                    "bridge (lgt_bridge.tau) instead of θ̇ = G⁻¹ω.")
 
 
+class TaitBryanZYX(TaitBryanXYZ):
+    """Tait-Bryan angles (θ0, θ1, θ2), R = Rz(θ0) Ry(θ1) Rx(θ2) (Pinocchio's spherical-ZYX joint).
+
+    Its transpose is an x-y-z set: R(θ0, θ1, θ2) = R_xyz(-θ2, -θ1, -θ0)ᵀ, so α and α⁻¹ are the
+    x-y-z ones on the conjugate quaternion with the angles reversed and negated (an isometry
+    of the angles: branch continuity and the gimbal lock at cos θ1 = 0 carry over; at the lock
+    θ2 keeps its previous value)."""
+
+    name = "rzyx"
+
+    def _to_quat(self, rot):
+        p = super()._to_quat(-rot[:, ::-1])
+        return p * np.array([1.0, -1.0, -1.0, -1.0])
+
+    def _from_quat(self, p, prev):
+        conj = p * np.array([1.0, -1.0, -1.0, -1.0])
+        return -super()._from_quat(conj, -prev[:, ::-1])[:, ::-1]
+
+    def G(self, rot):
+        """3x3 map ω = G(θ) θ̇ (body ω; Pinocchio's motion subspace of the ZYX joint)."""
+        arr, single = self._rot(rot, "rot")
+        s1, c1, s2, c2 = np.sin(arr[:, 1]), np.cos(arr[:, 1]), np.sin(arr[:, 2]), np.cos(arr[:, 2])
+        z, o = np.zeros_like(c1), np.ones_like(c1)
+        G = np.stack([-s1, z, o, s2 * c1, c2, z, c2 * c1, -s2, z], axis=1).reshape(-1, 3, 3)
+        return _checks.unbatch(G, single)
+
+    def _omega_from_rates(self, rot, rd):
+        return np.einsum("nij,nj->ni", self.G(rot).reshape(-1, 3, 3), rd)
+
+    def _rates_from_omega(self, rot, w):
+        s1, c1, s2, c2 = np.sin(rot[:, 1]), np.cos(rot[:, 1]), np.sin(rot[:, 2]), np.cos(rot[:, 2])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = (s2 * w[:, 1] + c2 * w[:, 2]) / c1
+        return np.stack([a, c2 * w[:, 1] - s2 * w[:, 2], w[:, 0] + s1 * a], axis=1)
+
+
 QUAT_WXYZ = Quaternion("wxyz")
 QUAT_XYZW = Quaternion("xyzw")
 ROTVEC = RotationVector()
 RXYZ = TaitBryanXYZ()
+RZYX = TaitBryanZYX()
 
 _BY_NAME = {"quat": QUAT_WXYZ, "quat_wxyz": QUAT_WXYZ, "wxyz": QUAT_WXYZ, "ep": QUAT_WXYZ,
             "quat_xyzw": QUAT_XYZW, "xyzw": QUAT_XYZW,
             "rotvec": ROTVEC, "rotation_vector": ROTVEC,
-            "rxyz": RXYZ, "tait_bryan_xyz": RXYZ, "tait_bryan": RXYZ}
+            "rxyz": RXYZ, "tait_bryan_xyz": RXYZ, "tait_bryan": RXYZ,
+            "rzyx": RZYX, "tait_bryan_zyx": RZYX}
 
 
 def get(param):
-    """A Parameterization from an instance or a name ('quat', 'quat_xyzw', 'rotvec', 'rxyz')."""
+    """A Parameterization from an instance or a name ('quat', 'quat_xyzw', 'rotvec', 'rxyz', 'rzyx')."""
     if isinstance(param, Parameterization):
         return param
     try:

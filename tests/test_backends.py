@@ -15,7 +15,7 @@ from lgt_bridge.simulate import simulate
 
 import backend_checks
 
-PARAMS = ["quat_wxyz", "quat_xyzw", "rotvec", "rxyz"]
+PARAMS = ["quat_wxyz", "quat_xyzw", "rotvec", "rxyz", "rzyx"]
 
 
 def close(a, b, tol=1e-13):
@@ -24,8 +24,9 @@ def close(a, b, tol=1e-13):
 
 
 class Mixed(Model):
-    """Two bodies of every parameterization, one rotation-only body per parameterization
-    and two vector-space coordinates, interleaved in q and V; a smooth coupled f."""
+    """Two bodies of every parameterization, one rotation-only body per parameterization,
+    two vector-space coordinates and a circle (SO(2)) coordinate, interleaved in q and V; a
+    smooth coupled f."""
 
     def __init__(self, rng):
         bodies, iq, iv = [], 2, 1          # vector coordinates first: q[0:2], V[0] and V[nv-1]
@@ -37,8 +38,12 @@ class Mixed(Model):
                 iq, iv = iq + p.nu, iv + 6
             bodies.append(RigidBody(p, (), tuple(range(iq, iq + p.nrot)), tuple(range(iv, iv + 3))))
             iq, iv = iq + p.nrot, iv + 3
-        self.layout = Layout(iq, iv + 1, bodies, vector_q=(0, 1), vector_v=(0, iv))
-        q = rng.normal(size=iq)
+        # the circle: q[iq:iq + 2] = (cos θ, sin θ) between the last body and nothing, its rate V[iv + 1]
+        self.layout = Layout(iq + 2, iv + 2, bodies, vector_q=(0, 1), vector_v=(0, iv),
+                             circle_q=((iq, iq + 1),), circle_v=(iv + 1,))
+        q = rng.normal(size=iq + 2)
+        th = rng.uniform(-3, 3)
+        q[iq], q[iq + 1] = np.cos(th), np.sin(th)
         for b in bodies:
             rot = list(b.rot)
             if b.param.nrot == 4:
@@ -46,8 +51,8 @@ class Mixed(Model):
             elif b.param.name == "rotvec":
                 q[rot] *= 2.5 / max(np.linalg.norm(q[rot]), 1.0)
         self.q0 = q
-        self.V0 = rng.normal(size=iv + 1)
-        self.K = rng.normal(size=(iv + 1, iv + 1)) * 0.1
+        self.V0 = rng.normal(size=iv + 2)
+        self.K = rng.normal(size=(iv + 2, iv + 2)) * 0.1
 
     def f(self, q, V, t):
         return -self.K @ V + np.sin(q[: len(V)] if len(q) >= len(V) else np.resize(q, len(V))) + t
@@ -104,8 +109,8 @@ def test_alpha_inverse_kernel_equals_params(p, prev, code, lock):
     """α⁻¹ with branch continuity (quaternion sign, rotation-vector half-turn ties,
     Tait-Bryan branches and gimbal lock) and α, kernel vs params."""
     p = np.array(p)
-    if lock and code == "rxyz":       # a rotation at gimbal lock: θ1 = ±π/2
-        p = params.RXYZ._to_quat(np.array([[p[0] * 3, np.sign(p[1] or 1) * np.pi / 2, p[2] * 3]]))[0]
+    if lock and code in ("rxyz", "rzyx"):       # a rotation at gimbal lock: θ1 = ±π/2
+        p = params.get(code)._to_quat(np.array([[p[0] * 3, np.sign(p[1] or 1) * np.pi / 2, p[2] * 3]]))[0]
     if np.linalg.norm(p) < 1e-3:
         p = np.array([1.0, 0, 0, 0])
     p = p / np.linalg.norm(p)

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 from lgt_bridge import InputError, LGTError, lgt, params
 from lgt_bridge.groups import se3
 
-PARAMS = [params.QUAT_WXYZ, params.QUAT_XYZW, params.ROTVEC, params.RXYZ]
+PARAMS = [params.QUAT_WXYZ, params.QUAT_XYZW, params.ROTVEC, params.RXYZ, params.RZYX]
 PAIRINGS = list(itertools.product(PARAMS, lgt.GROUPS, lgt.CHARTS))
 IDS = [f"{p.name}-{g}-{c}" for p, g, c in PAIRINGS]
 
@@ -24,6 +24,8 @@ def matrix_of(param, q):
         R = Rotation.from_quat(rot).as_matrix()
     elif param.name == "rotvec":
         R = Rotation.from_rotvec(rot).as_matrix()
+    elif param.name == "rzyx":
+        R = Rotation.from_euler("ZYX", rot).as_matrix()
     else:
         R = Rotation.from_euler("XYZ", rot).as_matrix()
     C = np.eye(4)
@@ -56,7 +58,7 @@ def random_q(param, rng):
     rot = rng.uniform(-3, 3, size=3)
     if param is params.ROTVEC:
         rot *= min(1.0, 3.0 / np.linalg.norm(rot))
-    if param is params.RXYZ:
+    if param in (params.RXYZ, params.RZYX):
         rot[1] = rng.uniform(-1.4, 1.4)
     return np.concatenate([r, rot])
 

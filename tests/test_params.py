@@ -20,6 +20,8 @@ def scipy_matrix(param, rot):
         return Rotation.from_quat(rot).as_matrix()
     if param.name == "rotvec":
         return Rotation.from_rotvec(rot).as_matrix()
+    if param.name == "rzyx":
+        return Rotation.from_euler("ZYX", rot).as_matrix()  # intrinsic z-y'-x'' (Pinocchio's ZYX joint)
     return Rotation.from_euler("XYZ", rot).as_matrix()      # intrinsic x-y'-z''
 
 
@@ -30,7 +32,7 @@ def sample_rot(param, rng):
     return rng.uniform(-3, 3, size=3)
 
 
-ALL = [params.QUAT_WXYZ, params.QUAT_XYZW, params.ROTVEC, params.RXYZ]
+ALL = [params.QUAT_WXYZ, params.QUAT_XYZW, params.ROTVEC, params.RXYZ, params.RZYX]
 
 
 @pytest.mark.parametrize("param", ALL, ids=lambda p: p.name)
@@ -74,7 +76,7 @@ def test_alpha_inv_round_trip(param, rng):
 def test_kinematic_maps_against_finite_differences(param, rng):
     for _ in range(30):
         rot = sample_rot(param, rng)
-        if param is params.RXYZ:
+        if param in (params.RXYZ, params.RZYX):
             rot[1] = np.clip(rot[1], -1.3, 1.3)
         omega = rng.normal(size=3)
         rd = param.rates_from_omega(rot, omega)
@@ -152,6 +154,30 @@ def test_tait_bryan_unwraps_across_pi_and_through_gimbal_lock():
     assert q[4] > np.pi / 2 + 1.0          # went through the singularity
     R = params.RXYZ.alpha(q)[:3, :3]
     assert np.isfinite(q).all() and abs(np.linalg.det(R) - 1) < 1e-12
+
+
+def test_zyx_angles_pass_through_gimbal_lock_continuously():
+    """Pinocchio's z-y-x set: θ1 driven through ±π/2 by ω = G(θ) e_y stays continuous and
+    on the rotation the body turned to (checked against composing the increments as matrices)."""
+    from lgt_bridge import lgt
+    q = np.array([0, 0, 0, 0.3, 0.1, -0.5])
+    prev, R = q.copy(), params.RZYX.alpha(q)[:3, :3]
+    for k in range(60):
+        w = params.RZYX.G(q[3:]) @ np.array([0.0, 1.0, 0.0])
+        q = lgt.tau(q, np.concatenate([0.05 * w, np.zeros(3)]), "rzyx", "SO3xR3", "exp")
+        R = R @ Rotation.from_rotvec(0.05 * w).as_matrix()
+        assert np.abs(q[3:] - prev[3:]).max() < 0.06
+        prev = q
+    assert q[4] > np.pi / 2 + 1.0
+    assert np.abs(params.RZYX.alpha(q)[:3, :3] - R).max() < 1e-12
+
+
+def test_zyx_exactly_at_lock_keeps_previous_theta2():
+    a = np.array([0.3, np.pi / 2, -0.2])
+    got = params.RZYX.from_quat(params.RZYX.to_quat(a), prev=np.array([0.25, 1.55, -0.1]))
+    R = params.RZYX.alpha(np.concatenate([np.zeros(3), got]))[:3, :3]
+    assert np.abs(R - params.RZYX.alpha(np.concatenate([np.zeros(3), a]))[:3, :3]).max() < 1e-12
+    assert abs(got[2] + 0.1) < 1e-12
 
 
 def test_tait_bryan_exactly_at_lock_keeps_previous_theta0():

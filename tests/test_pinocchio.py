@@ -145,8 +145,10 @@ def test_bad_input():
     with pytest.raises(InputError, match="tau"):
         PinocchioModel(model, tau=np.zeros(5))
     h = pin.Model()
-    h.addJoint(0, pin.JointModelSphericalZYX(), pin.SE3.Identity(), "zyx")
-    with pytest.raises(InputError, match="JointModelSphericalZYX"):
+    comp = pin.JointModelComposite()
+    comp.addJoint(pin.JointModelSpherical())
+    h.addJoint(0, comp, pin.SE3.Identity(), "composite")
+    with pytest.raises(InputError, match="JointModelSpherical component"):
         PinocchioModel(h)
 
 

@@ -1,8 +1,9 @@
 """Pinocchio joint types beyond free-flyers, spherical and revolute joints: continuous joints
 (URDF ``continuous``: RUBX/Y/Z and RevoluteUnboundedUnaligned, q = (cos θ, sin θ), stepped on
 SO(2) as circle coordinates), planar joints (SO(2)×R², v_xy in the joint frame converted to the
-parent frame), unaligned, translation, universal, ellipsoid and helical joints (vector spaces)
-and composite joints (split into their components). Each model is checked
+parent frame), spherical-ZYX joints (rotation-only bodies on the z-y-x angles, V = ω),
+unaligned, translation, universal, ellipsoid and helical joints (vector spaces) and composite
+joints (split into their components). Each model is checked
 against an independent reference on Pinocchio's own (q, v): scipy's DOP853 at 1e-12 with
 q̇ = d/dε pin.integrate(q, ε v) (4th-order central difference) and q renormalized by pin.normalize,
 none of which touches lgt_bridge's circle or τ code."""
@@ -78,7 +79,7 @@ def every_joint():
               pin.JointModelPrismaticUnaligned(axis), pin.JointModelTranslation(),
               pin.JointModelUniversal(np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
               pin.JointModelEllipsoid(0.1, 0.2, 0.3), pin.JointModelHX(0.05),
-              pin.JointModelSpherical(), comp, pin.JointModelPlanar()]
+              pin.JointModelSpherical(), comp, pin.JointModelPlanar(), pin.JointModelSphericalZYX()]
     return _chain(joints, root=pin.JointModelFreeFlyer())
 
 
@@ -242,18 +243,68 @@ def test_non_unit_continuous_joint_is_refused_naming_it():
         PinocchioModel(m, q0=q0)
 
 
-def test_spherical_zyx_is_refused_with_the_reason():
-    with pytest.raises(InputError, match="ZYX"):
-        PinocchioModel(_chain([pin.JointModelRX(), pin.JointModelSphericalZYX()]))
+def test_mimic_joints_are_refused_with_the_reason():
+    m = _chain([pin.JointModelRX(), pin.JointModelRY()])
+    try:
+        m2 = pin.transformJointIntoMimic(m, 1, 2, 2.0, 0.0)
+    except Exception:                                  # no mimic joints in this Pinocchio
+        pytest.skip("this Pinocchio has no transformJointIntoMimic")
+    with pytest.raises(InputError, match="mimic"):
+        PinocchioModel(m2)
 
 
-@pytest.mark.parametrize("part", ["JointModelSpherical", "JointModelPlanar"])
+@pytest.mark.parametrize("part", ["JointModelSpherical", "JointModelPlanar", "JointModelSphericalZYX"])
 def test_composite_with_a_rigid_component_is_refused(part):
     comp = pin.JointModelComposite()
     comp.addJoint(pin.JointModelRX())
     comp.addJoint(getattr(pin, part)())
     with pytest.raises(InputError, match=f"composite joint with a {part} component"):
         PinocchioModel(_chain([comp]))
+
+
+# --- spherical-ZYX joints: V = ω, written back through τ ----------------------------------------
+def test_zyx_twist_and_its_rate_are_pinocchios_joint_motion():
+    """V = ω of the child frame and V̇ = ω̇, against Pinocchio's own joint velocity and
+    acceleration (forwardKinematics with v and a = ABA's), on both backends."""
+    m = _chain([pin.JointModelSphericalZYX(), pin.JointModelRX()])
+    q0, v0 = start(m, seed=9)
+    for backend in ("numpy", "numba"):
+        pm = PinocchioModel(m, q0=q0, v0=v0, backend=backend)
+        d = m.createData()
+        a = pin.aba(m, d, q0, v0, np.zeros(m.nv))
+        pin.forwardKinematics(m, d, q0, v0, a)
+        np.testing.assert_allclose(pm.V0[:3], d.v[1].angular, rtol=1e-13, atol=1e-14)
+        np.testing.assert_allclose(pm.f(q0, pm.V0, 0.0)[:3], d.a[1].angular, rtol=1e-12, atol=1e-13)
+        np.testing.assert_allclose(pm.v_from_twist(q0, pm.V0), v0, rtol=1e-13, atol=1e-14)
+
+
+def test_zyx_angles_go_through_the_lock_continuously():
+    """A ball (isotropic inertia, centre on the joint, no gravity) on a ZYX joint spins at a
+    constant body ω mostly about its y axis, so R(t) = R0 exp(t ω̂) exactly. θ1 passes ±π/2
+    and on (Pinocchio's own q̇ = G⁻¹ω is singular there); the angles stay continuous and the
+    rotation matches the exact one to the accuracy G⁻¹ allows near the lock."""
+    from scipy.spatial.transform import Rotation
+
+    from lgt_bridge.params import RZYX
+    m = pin.Model()
+    j = m.addJoint(0, pin.JointModelSphericalZYX(), pin.SE3.Identity(), "ball")
+    m.appendBodyToJoint(j, pin.Inertia(2.0, np.zeros(3), 0.3 * np.eye(3)), pin.SE3.Identity())
+    q0 = np.array([0.2, 1.2, 0.0])
+    w = np.array([0.01, 2.0, 0.013])
+    T = 0.6
+    pm = PinocchioModel(m, q0=q0, v0=RZYX.rates_from_omega(q0, w))
+    r = simulate(pm, (0.0, T), method="dop853", group="SO3xR3", rtol=1e-11, atol=1e-11,
+                 t_eval=np.linspace(0, T, 61))
+    assert r.success, r.message
+    th1 = r.q[:, 1]
+    # near the lock θ0 and θ2 turn fast (only their sum is defined there; measured 0.53 rad
+    # between outputs) but never jump by a branch (π or 2π)
+    assert th1.max() > np.pi / 2 + 0.2 and np.abs(np.diff(r.q, axis=0)).max() < 1.0
+    assert np.abs(np.cos(th1)).min() < 0.05           # passed near the lock
+    R0 = RZYX.alpha(np.concatenate([np.zeros(3), q0]))[:3, :3]
+    for t, q in zip(r.t, r.q):
+        exact = R0 @ Rotation.from_rotvec(t * w).as_matrix()
+        assert np.abs(RZYX.alpha(np.concatenate([np.zeros(3), q]))[:3, :3] - exact).max() < 1e-7
 
 
 # --- planar joints: the velocity conversion and generalized-α's matrix --------------------------

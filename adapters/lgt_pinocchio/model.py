@@ -9,7 +9,12 @@ V are (ω body, ṙ inertial), angular first, where Pinocchio's velocity is
 sin θ), v = θ̇) are circle coordinates, stepped on SO(2). A planar joint (q = (x, y, cos θ,
 sin θ), v = (v_xy in the joint frame, ω)) is stepped on SO(2)×R²: its (x, y) are vector
 coordinates with rates ṗ = R(θ) v_xy in the parent frame, its (cos θ, sin θ) a circle
-coordinate with rate ω. Joints whose configuration space is a vector space (nq = nv:
+coordinate with rate ω. A spherical-ZYX joint (q = three z-y-x angles, v = their rates) is a
+rotation-only body with the z-y-x parameterization (``params.RZYX``), its V = ω in the child
+frame = G(q) v: the angles are written back through τ and go through ±π/2 continuously; f
+maps ω to Pinocchio's v = G⁻¹ω, so its accuracy is bounded near cos θ1 = 0 (as Exudyn's Rxyz
+nodes; generalized-α differences its Newton matrix on such models). Joints whose
+configuration space is a vector space (nq = nv:
 revolute, prismatic, translation, universal, ellipsoid, helical) are vector-space blocks;
 a composite joint is split into its components.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
@@ -37,9 +42,7 @@ from lgt_bridge.model import Layout, Model, RigidBody
 #: continuous joints: q = (cos θ, sin θ), v = θ̇ (SO(2))
 CIRCLE_JOINTS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned")
 #: joints Pinocchio steps as vector spaces (q̇ = v) that still have no τ of their own here
-NOT_YET = {"JointModelSphericalZYX": "its three angles are singular at cos(y) = 0 and lgt_bridge has no "
-                                     "ZYX chart yet",
-           "JointModelMimic": "a mimic joint has no coordinates of its own"}
+NOT_YET = {"JointModelMimic": "a mimic joint has no coordinates of its own"}
 #: joints integrated as vector spaces (q̇ = v)
 VECTOR_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX", "JointModelPY",
                  "JointModelPZ", "JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned",
@@ -54,6 +57,16 @@ _K = None           # lgt_pinocchio.kernels (imports numba), loaded by the first
 _J2 = np.array([[0.0, -1.0], [1.0, 0.0]])
 
 
+def _zyx_Gdot_v(th, v):
+    """Ġ θ̇ of the z-y-x angles th at rates v (ω̇ = G θ̈ + Ġ θ̇; checked against Pinocchio's
+    joint acceleration in tests)."""
+    s1, c1, s2, c2 = np.sin(th[1]), np.cos(th[1]), np.sin(th[2]), np.cos(th[2])
+    ad, bd, cd = v
+    return np.array([-c1 * bd * ad,
+                     (c2 * c1 * cd - s2 * s1 * bd) * ad - s2 * cd * bd,
+                     (-s2 * c1 * cd - c2 * s1 * bd) * ad - c2 * cd * bd])
+
+
 def _planar_R(q, iq):
     """R(θ) of the planar joint whose q starts at iq: q[iq + 2], q[iq + 3] = cos θ, sin θ."""
     c, s = q[iq + 2], q[iq + 3]
@@ -63,7 +76,7 @@ def _planar_R(q, iq):
 def _simple_joint(name, iq, iv, nq, nv):
     """A joint stepped as circle or vector coordinates (not a rigid body, not refused)."""
     return name in CIRCLE_JOINTS or name in VECTOR_JOINTS or (nq == nv and name not in NOT_YET and name not in (
-        "JointModelComposite", "JointModelFreeFlyer", "JointModelSpherical"))
+        "JointModelComposite", "JointModelFreeFlyer", "JointModelSpherical", "JointModelSphericalZYX"))
 
 
 def _pin():
@@ -163,7 +176,7 @@ class PinocchioModel(Model):
         self.compiled = _backend.compiled(backend)
         self.model, self.data = model, model.createData()
         bodies, vq, vv, cq, cv = [], [], [], [], []
-        self.roots, self.balls, self.planars = [], [], []
+        self.roots, self.balls, self.planars, self.zyx = [], [], [], []
         for j, jm in enumerate(model.joints):
             if j == 0:
                 continue
@@ -195,6 +208,11 @@ class PinocchioModel(Model):
                 cq.append((iq + 2, iq + 3))
                 cv.append(iv + 2)
                 self.planars.append((iq, iv))
+            elif name == "JointModelSphericalZYX":
+                # rotation-only body on the z-y-x angles; V = ω (child frame) = G(q) v
+                bodies.append(RigidBody(params.RZYX, (), tuple(range(iq, iq + 3)), tuple(range(iv, iv + 3)),
+                                        model.names[j]))
+                self.zyx.append((iq, iv))
             elif name == "JointModelFreeFlyer":
                 bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
                                         tuple(range(iv, iv + 6)), model.names[j]))
@@ -216,7 +234,10 @@ class PinocchioModel(Model):
         self.nq, self.nv = model.nq, model.nv
         self._riq = np.array([r[0] for r in self.roots], int)
         self._riv = np.array([r[1] for r in self.roots], int)
-        self._convert = bool(self.roots or self.planars)     # V and v differ somewhere
+        self._convert = bool(self.roots or self.planars or self.zyx)     # V and v differ somewhere
+        if self.zyx:
+            # generalized-α's analytic matrix has no blocks for G(q)⁻¹: it differences the step
+            self.iteration_matrix = None
         self._tau = tau
         if callable(tau):
             _check_signature(tau, "tau", "tau(t, q, v) returning the joint torques (size nv)")
@@ -254,9 +275,10 @@ class PinocchioModel(Model):
         self.V0 = self.twist_from_v(q0, v0)
         self._move = _lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
         self._move_ball = _lgt.RotationLGT(params.QUAT_XYZW, "exp")
+        self._move_zyx = _lgt.RotationLGT(params.RZYX, "exp")
         self._setup_constraints(constraints or [], fext)
         if self.compiled:
-            self._kW, self._kv = _kernels().pack(self.roots, self.nv, self.planars)   # roots, v, rotations
+            self._kW, self._kv = _kernels().pack(self.roots, self.nv, self.planars, self.zyx)
             self.f = self._f_compiled = self._build_f()
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
@@ -328,6 +350,8 @@ class PinocchioModel(Model):
             v[i + np.arange(3, 6)] = V[i + np.arange(3)]
         for iq, iv in self.planars:
             v[iv:iv + 2] = _planar_R(q, iq).T @ V[iv:iv + 2]
+        for iq, iv in self.zyx:
+            v[iv:iv + 3] = params.RZYX._rates_from_omega(q[None, iq:iq + 3], V[None, iv:iv + 3])[0]
         return v
 
     def twist_from_v(self, q, v):
@@ -339,6 +363,8 @@ class PinocchioModel(Model):
             V[i + np.arange(3, 6)] = _q._rotate(p, v[i + np.arange(3)])
         for iq, iv in self.planars:
             V[iv:iv + 2] = _planar_R(q, iq) @ v[iv:iv + 2]
+        for iq, iv in self.zyx:
+            V[iv:iv + 3] = params.RZYX.G(q[iq:iq + 3]) @ v[iv:iv + 3]
         return V
 
     # --- inputs -------------------------------------------------------------------------------
@@ -442,6 +468,8 @@ class PinocchioModel(Model):
             A[:, iv + 3:iv + 6] = G[:, iv:iv + 3] @ _xyzw_matrix(*q[iq + 3:iq + 7]).T
         for iq, iv in self.planars:
             A[:, iv:iv + 2] = G[:, iv:iv + 2] @ _planar_R(q, iq).T
+        for iq, iv in self.zyx:
+            A[:, iv:iv + 3] = np.linalg.solve(params.RZYX.G(q[iq:iq + 3]).T, G[:, iv:iv + 3].T).T
         return A
 
     def constraint_jacobian(self, q):
@@ -492,7 +520,7 @@ class PinocchioModel(Model):
         pin = self.pin
         q, V = np.asarray(q, float), np.asarray(V, float)
         v = self.v_from_twist(q, V)
-        pin.forwardKinematics(self.model, self._cdata, q, v, self._TdV(v))
+        pin.forwardKinematics(self.model, self._cdata, q, v, self._TdV(v, q))
         out = np.empty(self.n_constraints)
         for j1, pl1, j2, pl2, six, r in self._constraint_frames():
             R1, w1, p1, al1 = self._frame_motion(j1, pl1)
@@ -514,6 +542,9 @@ class PinocchioModel(Model):
         for iq, iv in self.balls:
             mb = self._move_ball
             out[iq:iq + 4] = mb.tau_pose(mb.base(q[iq:iq + 4][None]), d[iv:iv + 3][None])[0][0]
+        for iq, iv in self.zyx:
+            mz = self._move_zyx
+            out[iq:iq + 3] = mz.tau_pose(mz.base(q[iq:iq + 3][None]), d[iv:iv + 3][None])[0][0]
         vq = list(self.layout.vector_q)
         out[vq] = q[vq] + d[list(self.layout.vector_v)]
         if self.layout.circle_q:
@@ -550,6 +581,8 @@ class PinocchioModel(Model):
                 T[iv + 3:iv + 6, iv:iv + 3] = np.eye(3)
         for iq, iv in self.planars:
             T[iv:iv + 2, iv:iv + 2] = _planar_R(q, iq).T
+        for iq, iv in self.zyx:
+            T[iv:iv + 3, iv:iv + 3] = np.linalg.inv(params.RZYX.G(q[iq:iq + 3]))
         return T
 
     def mass_matrix(self, q):
@@ -572,12 +605,16 @@ class PinocchioModel(Model):
             b = pin.rnea(self.model, self.data, q, v, z, self._forces(t, q, v))
         M = pin.crba(self.model, self.data, q)
         M = np.triu(M) + np.triu(M, 1).T
-        return self._T(q).T @ (tau - b - M @ self._TdV(v))
+        return self._T(q).T @ (tau - b - M @ self._TdV(v, q))
 
-    def _TdV(self, v):
+    def _TdV(self, v, q=None):
         """Ṫ V: Pinocchio's acceleration at V̇ = 0, (-ω × v_lin, 0) on each free-flyer
-        (d/dt of Rᵀṙ at fixed ṙ), (-ω J v_xy, 0) on each planar joint, zero elsewhere."""
+        (d/dt of Rᵀṙ at fixed ṙ), (-ω J v_xy, 0) on each planar joint, -G⁻¹ Ġ θ̇ on each
+        spherical-ZYX joint (needs q), zero elsewhere."""
         TdV = np.zeros(self.nv)
+        for iq, iv in self.zyx:
+            th = q[iq:iq + 3]
+            TdV[iv:iv + 3] = -np.linalg.solve(params.RZYX.G(th), _zyx_Gdot_v(th, v[iv:iv + 3]))
         for _, iv in self.roots:
             TdV[iv:iv + 3] = _cross3(v[iv:iv + 3], v[iv + 3:iv + 6])
         for _, iv in self.planars:
@@ -664,7 +701,7 @@ class PinocchioModel(Model):
         u = self._user_force(t, q, v)
         residual = True                    # r(q, v, a) ≠ 0 at a: (∂Tᵀ/∂z) r is needed
         if Vdot is not None:
-            a = T @ np.asarray(Vdot, float) + self._TdV(v)
+            a = T @ np.asarray(Vdot, float) + self._TdV(v, q)
         elif nc and lam is not None:
             # Tᵀ r + Aᵀλ = 0 with T orthogonal: r = -T Aᵀλ, a = aba(u - T Aᵀλ)
             a = np.array(pin.aba(model, d, q, v, u - T @ (self.constraint_jacobian(q).T @ np.asarray(lam, float))))
@@ -824,6 +861,8 @@ class PinocchioModel(Model):
             Vd[i + np.arange(3, 6)] = _q._rotate(self._quats(q), a[i + np.arange(3)] + cross(w, vl))
         for iq, iv in self.planars:
             Vd[iv:iv + 2] = _planar_R(q, iq) @ (a[iv:iv + 2] + v[iv + 2] * _J2 @ v[iv:iv + 2])
+        for iq, iv in self.zyx:
+            Vd[iv:iv + 3] = params.RZYX.G(q[iq:iq + 3]) @ a[iv:iv + 3] + _zyx_Gdot_v(q[iq:iq + 3], v[iv:iv + 3])
         return Vd
 
     def pin_state(self, q, V):

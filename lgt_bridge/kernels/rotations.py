@@ -3,7 +3,7 @@ quaternion product and rotation, and α / α⁻¹ of every parameterization, one
 time on plain floats (numba keeps them in registers; tuples, no arrays).
 
 Parameterization codes (see :data:`PARAM_CODES`): 0 quaternion wxyz, 1 quaternion xyzw,
-2 rotation vector, 3 Tait-Bryan xyz. The reference implementations are
+2 rotation vector, 3 Tait-Bryan xyz, 4 Tait-Bryan zyx. The reference implementations are
 ``lgt_bridge.params`` and ``lgt_bridge.groups.quaternion``; tests hold them equal.
 """
 import math
@@ -13,7 +13,7 @@ from numba import njit
 
 from .. import _series
 
-PARAM_CODES = {"quat_wxyz": 0, "quat_xyzw": 1, "rotvec": 2, "rxyz": 3}
+PARAM_CODES = {"quat_wxyz": 0, "quat_xyzw": 1, "rotvec": 2, "rxyz": 3, "rzyx": 4}
 
 _SINC = np.array(_series._SINC)
 _C3 = np.array(_series._C3)
@@ -119,6 +119,14 @@ def to_quat(code, r0, r1, r2, r3):
         h = 0.5 * math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
         f = 0.5 * sinc(h)
         return math.cos(h), f * r0, f * r1, f * r2
+    if code == 4:           # z-y-x: the conjugate of the x-y-z set (-r2, -r1, -r0)
+        p0, p1, p2, p3 = _xyz_quat(-r2, -r1, -r0)
+        return p0, -p1, -p2, -p3
+    return _xyz_quat(r0, r1, r2)
+
+
+@njit(cache=True, error_model="numpy")
+def _xyz_quat(r0, r1, r2):
     h0, h1, h2 = 0.5 * r0, 0.5 * r1, 0.5 * r2
     ca, cb, cc = math.cos(h0), math.cos(h1), math.cos(h2)
     sa, sb, sc = math.sin(h0), math.sin(h1), math.sin(h2)
@@ -153,6 +161,16 @@ def from_quat(code, p0, p1, p2, p3, q0, q1, q2, q3):
                 and r0 * q0 + r1 * q1 + r2 * q2 < 0.0):
             r0, r1, r2 = -r0, -r1, -r2
         return r0, r1, r2, 0.0
+    if code == 4:           # z-y-x: the x-y-z angles of the conjugate, reversed and negated
+        o0, o1, o2 = _xyz_angles(p0, -p1, -p2, -p3, -q2, -q1, -q0)
+        return -o2, -o1, -o0, 0.0
+    o0, o1, o2 = _xyz_angles(p0, p1, p2, p3, q0, q1, q2)
+    return o0, o1, o2, 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _xyz_angles(p0, p1, p2, p3, q0, q1, q2):
+    """x-y-z angles of p on the branch continuous with (q0, q1, q2) (TaitBryanXYZ._from_quat)."""
     R00 = 1.0 - 2.0 * (p2 * p2 + p3 * p3)
     R01 = 2.0 * (p1 * p2 - p0 * p3)
     R02 = 2.0 * (p1 * p3 + p0 * p2)
@@ -177,4 +195,4 @@ def from_quat(code, p0, p1, p2, p3, q0, q1, q2, q3):
         M00 = cbb * R00 + sa * sbb * R10 - ca * sbb * R20
         M10 = ca * R10 + sa * R20
         o0, o1, o2 = a, b, _shift(math.atan2(M10, M00), q2)
-    return o0, o1, o2, 0.0
+    return o0, o1, o2
