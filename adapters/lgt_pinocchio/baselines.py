@@ -86,7 +86,8 @@ def pd_torque(model, q_ref, kp, kd):
     """tau(t, q, v) = kp (q_ref - q) - kd v on the actuated joints (every joint after the
     free-flyer root; their configuration spaces are vector spaces, nq = nv), zero on the
     root: what users write for joint-space PD control. kp, kd: scalars or vectors of
-    size nv - 6 (one gain per actuated joint)."""
+    size nv - 6 (one gain per actuated joint). ``tau.derivatives(t, q, v)`` gives its
+    constant Jacobians (dtau_dq, dtau_dv) for PinocchioModel's tau_derivatives."""
     iq, iv = _actuated(model)
     kp = np.broadcast_to(np.asarray(kp, float), iv.shape).copy()
     kd = np.broadcast_to(np.asarray(kd, float), iv.shape).copy()
@@ -99,6 +100,15 @@ def pd_torque(model, q_ref, kp, kd):
         out = np.zeros(nv)
         out[iv] = kp * (target - q[iq]) - kd * v[iv]
         return out
+
+    dq, dv = np.zeros((nv, nv)), np.zeros((nv, nv))
+    iv_all = np.arange(nv)[iv]
+    dq[iv_all, iv_all] = -kp                 # the actuated joints' tangent is their q (nq = nv)
+    dv[iv_all, iv_all] = -kd
+
+    def derivatives(t, q, v):
+        return dq, dv
+    tau.derivatives = derivatives            # (dtau_dq, dtau_dv): PinocchioModel(tau_derivatives=...)
     return tau
 
 

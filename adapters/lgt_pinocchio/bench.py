@@ -49,7 +49,8 @@ def _scene(make, T, euler_dts, rk4_dts, tols, about, tau=None):
     for both the PinocchioModel and the user loops."""
     def model():
         m, q0, v0 = make()
-        return PinocchioModel(m, q0=q0, v0=v0, tau=None if tau is None else tau())
+        t = None if tau is None else tau()
+        return PinocchioModel(m, q0=q0, v0=v0, tau=t, tau_derivatives=getattr(t, "derivatives", None))
 
     def native(loop):
         def run(setting):

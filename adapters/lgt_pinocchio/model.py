@@ -159,6 +159,10 @@ class PinocchioModel(Model):
     """A ``pinocchio.Model`` for :func:`lgt_bridge.simulate.simulate`.
 
     tau: None (zero), a vector of size nv, or ``tau(t, q, v)`` (Pinocchio's q and v).
+    tau_derivatives: None or ``tau_derivatives(t, q, v) -> (dtau_dq, dtau_dv)``, the
+    controller's Jacobians (nv x nv each; dtau_dq in Pinocchio's tangent coordinates, the
+    columns of pin.integrate's increments): generalized-α's Newton matrix then uses them
+    instead of 2 nv extra calls of tau per matrix (forward differences).
     fext: None or ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector
     (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame (a
     ``pinocchio.StdVec_Force`` is passed on without conversion: the cheapest form).
@@ -170,7 +174,8 @@ class PinocchioModel(Model):
     keep them) and must not be written to. f returns a new array either way.
     """
 
-    def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None):
+    def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None,
+                 tau_derivatives=None):
         pin = self.pin = _pin()
         _check_pin_model(pin, model)
         self.compiled = _backend.compiled(backend)
@@ -246,6 +251,13 @@ class PinocchioModel(Model):
         elif fext is not None:
             raise InputError(f"fext: expected None or a callable fext(t, q, v) returning one force per "
                              f"joint, got a {type(fext).__name__}.")
+        if tau_derivatives is not None:
+            if not callable(tau):
+                raise InputError("tau_derivatives is given but tau is not a callable tau(t, q, v); drop "
+                                 "tau_derivatives (a constant tau has none) or pass the controller as tau.")
+            _check_signature(tau_derivatives, "tau_derivatives",
+                             "tau_derivatives(t, q, v) returning (dtau_dq, dtau_dv), each nv x nv")
+        self._tau_derivatives = tau_derivatives
         if tau is not None and not callable(tau):
             tau = np.asarray(tau, float)
             if tau.shape != (self.nv,) or not np.isfinite(tau).all():
@@ -282,6 +294,8 @@ class PinocchioModel(Model):
             self.f = self._f_compiled = self._build_f()
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
+        if tau_derivatives is not None:
+            self._tau_jacobians(0.0, q0, v0)
         if fext is not None:
             self._forces(0.0, q0, v0)
 
@@ -668,23 +682,49 @@ class PinocchioModel(Model):
             u += pin.rnea(self.model, d, q, v, z) - pin.rnea(self.model, d, q, v, z, self._forces(t, q, v))
         return u
 
+    def _tau_jacobians(self, t, q, v):
+        """(dtau_dq, dtau_dv) from the user's tau_derivatives, checked."""
+        try:
+            dq, dv = self._tau_derivatives(t, q, v)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"tau_derivatives(t, q, v) must return a pair (dtau_dq, dtau_dv): {exc}") from None
+        dq, dv = np.asarray(dq, float), np.asarray(dv, float)
+        shape = (self.nv, self.nv)
+        if dq.shape != shape or dv.shape != shape or not (np.isfinite(dq).all() and np.isfinite(dv).all()):
+            raise InputError(f"tau_derivatives(t, q, v) returned arrays of shapes {dq.shape} and {dv.shape}; "
+                             f"expected two finite ({self.nv}, {self.nv}) matrices (dtau_dq in Pinocchio's "
+                             "tangent coordinates, dtau_dv).")
+        return dq, dv
+
     def _user_force_derivatives(self, t, q, v, u0):
-        """(∂u/∂q in Pinocchio's tangent coordinates, ∂u/∂v) by forward differences from
-        u0 = u(t, q, v) (2 nv calls of the controller per matrix), or None when u is constant."""
-        if not callable(self._tau) and self._fext is None:
-            return None
+        """(∂u/∂q in Pinocchio's tangent coordinates, ∂u/∂v): tau's from tau_derivatives when
+        given, the rest (fext's joint torques, or a tau without derivatives) by forward
+        differences from u0 = u(t, q, v) (2 nv calls per matrix); None when u is constant."""
+        analytic = self._tau_derivatives is not None
+        if (not callable(self._tau) or analytic) and self._fext is None:
+            return self._tau_jacobians(t, q, v) if analytic else None
         pin, model, nv = self.pin, self.model, self.nv
+        force = self._user_force
+        if analytic:                                 # difference fext's part only
+            u0 = u0 - self._torques(t, q, v)
+
+            def force(t, q, v):
+                return self._user_force(t, q, v) - self._torques(t, q, v)
         Dq, Dv = np.empty((nv, nv)), np.empty((nv, nv))
         e, vp = np.zeros(nv), v.copy()
         h = 1.5e-8                                   # ≈ √eps: q's tangent is O(1)
         for k in range(nv):
             e[k] = h
-            Dq[:, k] = (self._user_force(t, pin.integrate(model, q, e), v) - u0) / h
+            Dq[:, k] = (force(t, pin.integrate(model, q, e), v) - u0) / h
             e[k] = 0.0
             hv = h * max(1.0, abs(v[k]))
             vp[k] = v[k] + hv
-            Dv[:, k] = (self._user_force(t, q, vp) - u0) / (vp[k] - v[k])
+            Dv[:, k] = (force(t, q, vp) - u0) / (vp[k] - v[k])
             vp[k] = v[k]
+        if analytic:
+            dq, dv = self._tau_jacobians(t, q, v)
+            Dq += dq
+            Dv += dv
         return Dq, Dv
 
     def _iteration_parts(self, q, V, t, lam=None, Vdot=None):
