@@ -1,8 +1,8 @@
 """Issue 12, robots as bench scenes: ``lgt-bridge bench pinocchio_robot:NAME --scenario free|pd``.
 
-The registry and every option check run without the robot loaders (CI installs
-``.[test,all]``, which leaves out the ``robots`` extra: the loaders are hidden or faked
-here); only the runs on a real robot need ``example-robot-data-loaders``."""
+The registry and every option check run without the robot loaders (hidden or faked here);
+only the runs on a real robot need ``example-robot-data-loaders`` (the ``robots`` extra, which
+the README's test command installs)."""
 import json
 import sys
 import types
