@@ -204,6 +204,18 @@ class Model:
                 and type(self).forces is not Model.forces)
 
 
+def combine_iteration(parts, c_acc, c_vel, c_pos):
+    """M c_acc + C_t c_vel + K_t c_pos from ``parts`` = (M, C_t, K_t): what a model's
+    ``iteration_matrix`` returns from its three matrices (zero coefficients skipped)."""
+    M, C, K = parts
+    out = c_acc * M
+    if c_vel:
+        out = out + c_vel * C
+    if c_pos:
+        out = out + c_pos * K
+    return out
+
+
 def solve_kkt(M, A, rhs_v, rhs_c):
     """[M Aᵀ; A 0] [x; λ] = [rhs_v; rhs_c] by the range-space method (M SPD). A
     rank-deficient A (redundant constraints) gives the minimum-norm λ and the unique x."""

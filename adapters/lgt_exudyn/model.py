@@ -18,7 +18,7 @@ from lgt_bridge import lgt as _lgt
 from lgt_bridge import params
 from lgt_bridge.errors import InputError, LGTError, ModelError
 from lgt_bridge.groups._vec import hat
-from lgt_bridge.model import Layout, Model, RigidBody, solve_kkt
+from lgt_bridge.model import Layout, Model, RigidBody, combine_iteration, solve_kkt
 
 RIGID = {"RigidBodyEP": params.QUAT_WXYZ, "RigidBodyRotVecLG": params.ROTVEC,
          "RigidBodyRxyz": params.RXYZ}
@@ -720,13 +720,7 @@ class ExudynModel(Model):
                 J = np.asarray(S.GetSystemJacobian())[:n2, :n2]
                 parts.append(-(H.T @ (J @ H)))
             cached = self._it_cache = (key, parts)
-        M, C, K = cached[1]
-        out = c_acc * M
-        if c_vel:
-            out = out + c_vel * C
-        if c_pos:
-            out = out + c_pos * K
-        return out
+        return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
     def constraints(self, q):
         return self.constraints_at(q, self.sd.GetTime())

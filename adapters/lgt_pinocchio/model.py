@@ -37,7 +37,7 @@ from lgt_bridge import params
 from lgt_bridge.errors import InputError
 from lgt_bridge.groups import quaternion as _q
 from lgt_bridge.groups._vec import cross
-from lgt_bridge.model import Layout, Model, RigidBody
+from lgt_bridge.model import Layout, Model, RigidBody, combine_iteration
 
 #: continuous joints: q = (cos θ, sin θ), v = θ̇ (SO(2))
 CIRCLE_JOINTS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned")
@@ -648,9 +648,10 @@ class PinocchioModel(Model):
             C_t = Tᵀ (∂r/∂v T + M ∂a/∂V)
             K_t = Tᵀ (∂r/∂q T + ∂r/∂v ∂v/∂z + M ∂a/∂z) + (∂Tᵀ/∂z) r + ∂(Aᵀλ)/∂z
 
-        (Pinocchio's tangent increment of a free-flyer is T z to first order; ∂v/∂z, ∂a/∂z,
-        ∂a/∂V and ∂Tᵀ/∂z are nonzero on the free-flyers only: v_lin = Rᵀṙ turns with δθ).
-        ∂u/∂q and ∂u/∂v by forward differences when tau or fext is a callable.
+        (Pinocchio's tangent increment of a free-flyer or planar joint is T z to first order;
+        ∂v/∂z, ∂a/∂z, ∂a/∂V and ∂Tᵀ/∂z are nonzero on those only: v_lin = Rᵀṙ turns with δθ).
+        ∂u/∂q and ∂u/∂v from ``tau_derivatives`` when given, else by forward differences when
+        tau or fext is a callable. Models with spherical-ZYX joints have no analytic matrix.
 
         The derivatives are taken at V̇ = ``Vdot``, by default at the acceleration Newton
         converges to: ABA's, M̄⁻¹(Q̄ - Aᵀλ) given the constraint forces ``lam``, else
@@ -665,13 +666,7 @@ class PinocchioModel(Model):
             with np.errstate(over="ignore", invalid="ignore"):   # a diverging iterate: genalpha
                 parts = self._iteration_parts(q, V, t, lam, Vdot)  # checks the matrix is finite
             cached = self._it_cache = (key, parts)
-        M, C, K = cached[1]
-        out = c_acc * M
-        if c_vel:
-            out = out + c_vel * C
-        if c_pos:
-            out = out + c_pos * K
-        return out
+        return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
     def _user_force(self, t, q, v):
         """u(t, q, v): tau plus the joint torques of fext (Jᵀ f = rnea(q, v, 0) - rnea(q, v, 0, fext))."""
