@@ -53,6 +53,9 @@ import numpy as np
 from numba import njit
 
 from lgt_bridge.kernels.rotations import from_quat, qmul, rotvec_minus_one, to_quat
+from lgt_bridge.kernels import guard_cache
+
+guard_cache(__file__)
 
 #: rotations.to_quat codes of Exudyn's rotation nodes
 NODE_CODE = {"RigidBodyEP": 0, "RigidBodyRotVecLG": 2, "RigidBodyRxyz": 3}

@@ -31,6 +31,9 @@ import numpy as np
 from numba import njit
 
 from lgt_bridge.kernels.rotations import cross, rotate, to_quat
+from lgt_bridge.kernels import guard_cache
+
+guard_cache(__file__)
 
 XYZW = 1          # rotations.to_quat code of Pinocchio's quaternion order
 

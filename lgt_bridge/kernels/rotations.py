@@ -12,6 +12,9 @@ import numpy as np
 from numba import njit
 
 from .. import _series
+from . import guard_cache
+
+guard_cache(__file__)
 
 PARAM_CODES = {"quat_wxyz": 0, "quat_xyzw": 1, "rotvec": 2, "rxyz": 3, "rzyx": 4}
 

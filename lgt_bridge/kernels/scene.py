@@ -28,7 +28,10 @@ import math
 import numpy as np
 from numba import njit
 
+from . import guard_cache
 from .rotations import cross, to_quat
+
+guard_cache(__file__)
 
 # per body float columns
 MASS, MINVT, J, JINV, COM = 0, 1, 2, 11, 20

@@ -19,7 +19,10 @@ import math
 import numpy as np
 from numba import njit
 
+from . import guard_cache
 from .rotations import c3, cross, dser, eser, from_quat, gibbs_minus_one, qmul, rotate, rotvec_minus_one, to_quat
+
+guard_cache(__file__)
 
 # columns of the body table
 PARAM, SE3, CAY, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
