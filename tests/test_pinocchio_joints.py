@@ -354,3 +354,38 @@ def test_pr2_from_the_loaders():
     assert r.success, r.message
     dq, dv = gap(m, pm, r, ref)
     assert dq < 1e-8 and dv < 1e-8 * max(1.0, np.abs(ref[1]).max())
+
+
+# --- circles inside a closed loop: projection and generalized-α's constraint rows ---------------
+def pinned_spatial_chain():
+    """Continuous joints about z, y, x and a revolute joint, the last link's tip pinned to
+    the world where it starts (a 3-D contact: one degree of freedom left), gravity on."""
+    from test_pinocchio_constraints import C3, _constraint
+    m = _chain([pin.JointModelRUBZ(), pin.JointModelRUBY(), pin.JointModelRUBX(), pin.JointModelRX()])
+    q0, _ = start(m, seed=6)
+    tip = pin.SE3(np.eye(3), np.array([0.1, 0.05, 0.2]))
+    cm = _constraint(m, q0, C3, m.njoints - 1, tip)
+    return m, q0, cm
+
+
+@pytest.mark.parametrize("method, kw", [("dop853", dict(rtol=1e-10, atol=1e-10)), ("genalpha", dict(dt=1e-3))])
+def test_continuous_joints_in_a_closed_loop(method, kw):
+    """The constrained chain keeps its pin (projection after explicit steps; index-3 rows in
+    generalized-α) with (cos θ, sin θ) unit, and conserves energy (no damping): dop853 to
+    1e-8, generalized-α (dissipative, ρ∞ = 0.9, h = 1e-3) to 1e-3 of the energy's swing."""
+    m, q0, cm = pinned_spatial_chain()
+    pm = PinocchioModel(m, q0=q0, constraints=[cm])
+    assert pm.n_constraints == 3 and len(pm.layout.circle_q) == 3
+    # a velocity the pin allows: the null space of A
+    A = pm.constraint_jacobian(q0)
+    V0 = np.linalg.svd(A)[2][-1] * 2.0
+    assert np.abs(A @ V0).max() < 1e-12
+    r = simulate(pm, (0.0, 0.5), method=method, group="SO3xR3", q0=q0, V0=V0, **kw)
+    assert r.success, r.message
+    assert np.abs(pm.constraints(r.q[-1])).max() < 1e-9
+    for c, s in pm.layout.circle_q:
+        assert abs(np.hypot(r.q[-1, c], r.q[-1, s]) - 1.0) < 1e-14
+    E = [pm.energy(q, V) for q, V in zip(r.q, r.V)]
+    swing = max(abs(pm.energy(q0, V0)), 1.0)
+    assert abs(E[-1] - E[0]) < (1e-8 if method == "dop853" else 1e-3) * swing
+    assert np.abs(r.q[-1] - q0).max() > 0.05                     # it moved
