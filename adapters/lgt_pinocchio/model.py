@@ -14,9 +14,8 @@ rotation-only body with the z-y-x parameterization (``params.RZYX``), its V = ω
 frame = G(q) v: the angles are written back through τ and go through ±π/2 continuously; f
 maps ω to Pinocchio's v = G⁻¹ω, so its accuracy is bounded near cos θ1 = 0 (as Exudyn's Rxyz
 nodes; generalized-α differences its Newton matrix on such models). Joints whose
-configuration space is a vector space (nq = nv:
-revolute, prismatic, translation, universal, ellipsoid, helical) are vector-space blocks;
-a composite joint is split into its components.
+configuration space is a vector space (nq = nv: revolute, prismatic, translation, universal,
+ellipsoid, helical) are vector-space blocks; a composite joint is split into its components.
 f(q, V, t) = Pinocchio's ABA, with r̈ = R (a_lin + ω × v_lin) for the roots.
 
 Constraints (RigidConstraintModel, 3-D/6-D, to the world or loop closures): f from
