@@ -242,6 +242,78 @@ def slider_crank(node=EP, violate=False, crank_speed=4.0, torque=2.0, closing=No
     return mbs, redundant_settings(0.2, 100)
 
 
+#: the orthogonal Bricard 6R linkage: Denavit-Hartenberg d = 0, a = BRICARD_A, twists
+#: alternating +90° and -90°
+BRICARD_A = 0.3
+
+
+def _dh(theta, a, alpha):
+    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
+    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
+                     [0, sa, ca, 0.0], [0, 0, 0, 1.0]])
+
+
+def bricard_frames(theta):
+    """Frames F_0 = I, F_i = F_{i-1} Rz(θ_i) Tx(a) Rx(α_i) of the six links (F_6 = F_0 when the
+    loop closes): joint i turns about the z axis of F_{i-1} through its origin."""
+    F = [np.eye(4)]
+    for k, th in enumerate(theta):
+        F.append(F[-1] @ _dh(th, BRICARD_A, np.pi / 2 if k % 2 == 0 else -np.pi / 2))
+    return F
+
+
+@functools.lru_cache(maxsize=None)
+def bricard_symmetric_angles():
+    """(θ_odd, θ_even) of the loop's threefold-symmetric closed configuration (joint angles
+    alternating; ≈ (0.7467, 2.0079) rad), solved from F_6 = I by Gauss-Newton."""
+    from scipy.optimize import least_squares
+
+    def gap(x):
+        return (bricard_frames(np.array([x[0], x[1]] * 3))[6] - np.eye(4))[:3].ravel()
+    return tuple(least_squares(gap, [0.75, 2.0], xtol=1e-15, ftol=1e-15, gtol=1e-15).x)
+
+
+def bricard(node=EP, speed=3.0, closing=None):
+    """The orthogonal Bricard linkage: six rods joined in a closed loop by six revolute
+    joints (CreateRevoluteJoint), link 0 the ground. By Grübler's count (5 bodies × 6 - 6 × 5
+    equations) it is rigid, yet it moves with one degree of freedom: the loop's equations are
+    dependent everywhere on its motion (1 redundant), not only in a plane as a four-bar's.
+    It starts in the threefold-symmetric configuration, moving along its one mode at
+    ``speed`` rad/s (the largest joint rate), under gravity. ``closing``: constrainedAxes of
+    a GenericJoint (axes: the joint's axis as local z) replacing the closing joint 6, e.g.
+    [1,1,1,1,0,0]: the same motion without the redundant equation."""
+    theta = np.array(list(bricard_symmetric_angles()) * 3)
+    F = bricard_frames(theta)
+    assert np.abs(F[6] - np.eye(4)).max() < 1e-12                     # the loop closes
+    o = [f[:3, 3] for f in F]
+    z = [f[:3, 2] for f in F]
+    # joint rates of the one mode: Σ θ̇_k ξ_k = 0 with ξ_k = (z_{k-1}, o_{k-1} × z_{k-1})
+    Xi = np.array([np.concatenate([z[k], np.cross(o[k], z[k])]) for k in range(6)]).T
+    rates = np.linalg.svd(Xi)[2][-1]
+    rates *= speed / np.abs(rates).max()
+    assert np.abs(Xi @ rates).max() < 1e-12
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    links = [ground]
+    for i in range(1, 6):                                  # link i: from joint i (o_{i-1}) to joint i+1 (o_i)
+        com = 0.5 * (o[i - 1] + o[i])
+        w = sum(rates[k] * z[k] for k in range(i))
+        v = sum(rates[k] * np.cross(z[k], com - o[k]) for k in range(i))
+        links.append(mbs.CreateRigidBody(inertia=InertiaCuboid(density=2000, sideLengths=[BRICARD_A, 0.03, 0.02]),
+                                         nodeType=node, referencePosition=com, referenceRotationMatrix=F[i][:3, :3],
+                                         initialAngularVelocity=w, initialVelocity=v, gravity=[0, 0, -9.81]))
+    links.append(ground)
+    for i in range(1, 7):                                  # joint i between links i-1 and i
+        if i == 6 and closing is not None:
+            mbs.CreateGenericJoint(itemNumbers=[links[5], links[6]], position=o[5], rotationMatrixAxes=F[5][:3, :3],
+                                   constrainedAxes=list(closing))
+        else:
+            mbs.CreateRevoluteJoint(itemNumbers=[links[i - 1], links[i]], position=o[i - 1], axis=z[i - 1])
+    mbs.Assemble()
+    return mbs, redundant_settings(0.2, 100)
+
+
 # ---------------------------------------------------------------------------- comparison state
 def state_at_end(mbs, nodes):
     """Parameterization-independent state of the listed nodes in the system's current
@@ -427,7 +499,9 @@ class Case:
     position constraints: Exudyn's own run converges only at first order to that motion,
     so the reference integrates from the projected state instead). ``ref_steps``: first
     and largest numberOfSteps of the reference's step doubling. ``genalpha_steps``:
-    numberOfSteps for the bridge's fixed-step generalized-α."""
+    numberOfSteps for the bridge's fixed-step generalized-α. ``reference_build``: the same
+    motion for Exudyn's reference where Exudyn's solver cannot run ``build`` (the Bricard
+    linkage: its closing joint without the redundant equation)."""
     name: str
     build: Callable
     compare_nodes: tuple
@@ -437,6 +511,10 @@ class Case:
     genalpha_steps: int = 200
     ref_steps: tuple = (None, 16000)
     rho: float = 0.5
+    #: Exudyn's count of redundant equations (redundant cases)
+    redundant: int = 3
+    #: what Exudyn's own reference runs, when it cannot run ``build`` itself (None: ``build``)
+    reference_build: Callable = None
 
     def __post_init__(self):
         if self.ref_steps[0] is None:                       # the reference starts at the bridge's step
@@ -482,7 +560,7 @@ def exudyn_run(case, n, start=None, solverType=exu.DynamicSolverType.Generalized
     ``newton``: NewtonSettings overriding REF_NEWTON (Exudyn's first step from a violated
     position needs looser ones: relativeTolerance=1e-10, absoluteTolerance=1e-12)."""
     CASE.setdefault(case.name, case)
-    mbs, s = case.build()
+    mbs, s = (case.reference_build or case.build)()
     start = case.start if start is None else start
     if start in ("projected", "velocity-projected"):
         q, v = _projected_initial_state(case.name, start)
@@ -580,6 +658,11 @@ CASES = [
           "four-bar of GenericJoint [1,1,1,1,1,0]: redundant and inactive rows, RotVecLG"),
     _case("redundant-slider-crank-EP", lambda: slider_crank(EP), [0, 1, 2], "redundant",
           "3-D slider-crank, RevoluteJointZ x3 + PrismaticJointX, crank torque, EP"),
+    _case("redundant-bricard-EP", lambda: bricard(EP), [0, 1, 2, 3, 4], "redundant",
+          "orthogonal Bricard 6R loop of CreateRevoluteJoint: 35 equations, 1 redundant everywhere on its motion, "
+          "1 DOF, EP; Exudyn's GA stops on it (Newton fails at the first step), so its reference runs the closing "
+          "joint as GenericJoint [1,1,1,1,0,0]", redundant=1,
+          reference_build=lambda: bricard(EP, closing=[1, 1, 1, 1, 0, 0])),
     _case("inconsistent-velocity-fourbar-EP", lambda: fourbar(EP, consistent=False), [0, 1, 2], "inconsistent",
           "four-bar (redundant) whose coupler and rocker start at rest while the crank spins: 1.5 m/s violation"),
     _case("inconsistent-position-slider-crank-EP", lambda: slider_crank(EP, violate=True), [0, 1, 2], "inconsistent",
