@@ -36,7 +36,7 @@ from lgt_bridge import params
 from lgt_bridge.errors import InputError
 from lgt_bridge.groups import quaternion as _q
 from lgt_bridge.groups._vec import cross
-from lgt_bridge.model import Layout, Model, RigidBody, combine_iteration
+from lgt_bridge.model import CIRCLE_NORM_TOL, Layout, Model, RigidBody, combine_iteration
 
 #: continuous joints: q = (cos θ, sin θ), v = θ̇ (SO(2))
 CIRCLE_JOINTS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned")
@@ -278,7 +278,7 @@ class PinocchioModel(Model):
         for b in bodies:
             b.validate(q0, f"q0 of joint {b.name!r}")
         for c, _ in cq:
-            if abs(np.hypot(q0[c], q0[c + 1]) - 1.0) > 1e-6:
+            if not abs(np.hypot(q0[c], q0[c + 1]) - 1.0) <= CIRCLE_NORM_TOL:
                 raise InputError(f"q0: {self.joint_of('q', c)} is a continuous joint whose (cos θ, sin θ) = "
                                  f"({q0[c]!r}, {q0[c + 1]!r}) is not of unit norm; give (cos θ, sin θ) "
                                  "(pin.neutral(model) and pin.randomConfiguration(model) do).")
@@ -620,10 +620,10 @@ class PinocchioModel(Model):
         M = np.triu(M) + np.triu(M, 1).T
         return self._T(q).T @ (tau - b - M @ self._TdV(v, q))
 
-    def _TdV(self, v, q=None):
+    def _TdV(self, v, q):
         """Ṫ V: Pinocchio's acceleration at V̇ = 0, (-ω × v_lin, 0) on each free-flyer
-        (d/dt of Rᵀṙ at fixed ṙ), (-ω J v_xy, 0) on each planar joint, -G⁻¹ Ġ θ̇ on each
-        spherical-ZYX joint (needs q), zero elsewhere."""
+        (d/dt of Rᵀṙ at fixed ṙ), (-ω J v_xy, 0) on each planar joint, -G(q)⁻¹ Ġ θ̇ on each
+        spherical-ZYX joint, zero elsewhere."""
         TdV = np.zeros(self.nv)
         for iq, iv in self.zyx:
             th = q[iq:iq + 3]
