@@ -145,6 +145,10 @@ class Model:
     Required: ``layout``, ``q0``, ``V0``, and either ``f`` or ``mass_matrix`` +
     ``forces`` (then ``f`` solves the index-1 system). Optional: constraint
     functions (``n_constraints > 0``), ``write_back``.
+
+    ``f`` may be handed views of the integrator's buffers (the compiled backend's stages and
+    generalized-α's unconstrained Newton residuals): read q and V during the call, and copy
+    what you keep beyond it.
     """
 
     layout: Layout

@@ -101,6 +101,21 @@ def test_stage_kernels_equal_numpy(group, chart, rng):
         e1 = comp.end(KXs[1], KWs[1], np.array([0.1, 0.2, 0.3, 0.4]), 0.1, W)
         for u, v in zip(e1[:4], e0[:4]):
             assert close(u, v)
+        # generalized-α's fused state (W = Wa + s_v Ẇ, X = dXa + sp Ẇ[to_local]) and residual
+        tl = np.rint(ref.to_local(np.arange(ref.nv, dtype=float))).astype(np.int64)
+        sp = rng.uniform(0.5, 1.0, size=ref.nX) * scale
+        Wd, Vd = rng.normal(size=ref.nv), rng.normal(size=ref.nv)
+        outs, res = [], []
+        for prob in (ref, comp):
+            q, V, quats, Wn = prob.ga_state(Wd, 0.3, sp, W, X, tl)
+            r = np.empty(ref.nv)
+            res.append((r, prob.ga_residual(Vd, Wd, r, Wn, quats)))
+            outs.append((q.copy(), V.copy(), Wn.copy()))
+        q_expect, _ = ref.configuration(X + sp * Wd[tl])
+        assert close(outs[0][0], q_expect)
+        for u, v in zip(outs[1], outs[0]):
+            assert close(u, v)
+        assert close(res[1][0], res[0][0]) and abs(res[1][1] - res[0][1]) <= 1e-12 * max(1.0, res[0][1])
 
 
 @given(p=st.lists(st.floats(-1, 1), min_size=4, max_size=4), prev=st.lists(st.floats(-4, 4), min_size=4, max_size=4),

@@ -300,7 +300,8 @@ def test_factorize_solves_J_z_equals_L_r(n, coupled, rng):
     r = rng.normal(size=n)
     expect = np.linalg.solve(J.toarray(), L @ r)
     for JJ, LL in ((J, L), (J.toarray(), L.toarray())):
-        np.testing.assert_allclose(gm.factorize(JJ, LL)(r), expect, rtol=1e-10, atol=1e-12)
+        for compiled in (False, True):            # the block product in scipy or in the kernel
+            np.testing.assert_allclose(gm.factorize(JJ, LL, compiled)(r), expect, rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(gm.factorize(J)(r), np.linalg.solve(J.toarray(), r), rtol=1e-10, atol=1e-12)
     Js = J.tolil()
     Js[3, :] = 0.0

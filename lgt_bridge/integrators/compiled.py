@@ -111,6 +111,19 @@ class CompiledProblem(LocalProblem):
         self.n_f += 1
         return Xd, self.group_acceleration(Vd, self._W, p), q, V
 
+    # --- generalized-α ---------------------------------------------------------------
+    def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):
+        """(q, V, quats, W) at W = Wa + sv Ẇ, X = dXa + sp Ẇ[to_local]: one kernel call;
+        views of the work array, valid until the next evaluation."""
+        _k.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off)
+        return self._q, self._V, self._p, self._W
+
+    def ga_residual(self, Vd, Wd, r, W, quats):
+        """r = Ẇ - Ẇ(V̇) at the last ga_state (W, quats are its own); returns Σ r²."""
+        if type(Vd) is not np.ndarray or Vd.dtype is not _F64:
+            Vd = np.ascontiguousarray(Vd, dtype=float)
+        return _k.ga_residual(Vd, Wd, r, self.work, self.bt, self.off)
+
     # --- the stage API ------------------------------------------------------------
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
         self._w0(W0)

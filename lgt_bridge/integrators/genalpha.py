@@ -35,6 +35,7 @@ Bodies that do not interact give a block-diagonal matrix, inverted per block; ot
 sparse LU above SPARSE_MIN unknowns, dense LU below (:func:`.genalpha_matrix.factorize`).
 """
 import inspect
+import math
 from collections import namedtuple
 
 import numpy as np
@@ -151,15 +152,23 @@ class GenAlpha(Stepper):
         self._consts = None
         return self._residual(Wd1, lam, t1, h)
 
+    def _evaluate(self, Wd1, h):
+        """(q, V, quats, W) at the step's end for Ẇ_{k+1}: one kernel call on the compiled
+        backend, whose arrays are views of its work array (valid until the next call)."""
+        c = self._affine(h)
+        return self.prob.ga_state(Wd1, c.s_v, c.sp, c.W0, c.dX0, self._to_local)
+
     def _residual(self, Wd1, lam, t1, h):
-        """The rows of the module docstring, then g/(h²β)."""
+        """The rows of the module docstring, then g/(h²β). Sets ``_finite``."""
         prob, m = self.prob, self.prob.model
-        W1, dX = self._state(Wd1, h)
-        q1, quats = prob.configuration(dX)
-        V1 = prob.model_velocity(W1, quats)
+        q1, V1, quats, W1 = self._evaluate(Wd1, h)
         prob.n_f += 1
         if not self.nc:
-            return Wd1 - prob.group_acceleration(m.f(q1, V1, t1), W1, quats)
+            # the model's f sees the kernel's buffers, as in the explicit methods' stages
+            r = np.empty(len(Wd1))
+            self._finite = math.isfinite(prob.ga_residual(m.f(q1, V1, t1), Wd1, r, W1, quats))
+            return r
+        q1, V1, quats, W1 = q1.copy(), V1.copy(), quats.copy(), W1.copy()
         A = m.constraint_jacobian(q1)
         Q = m.forces(q1, V1, t1) - A.T @ lam
         if self.accel_form:
@@ -168,7 +177,9 @@ class GenAlpha(Stepper):
             Rd = m.mass_matrix(q1) @ prob.model_acceleration(Wd1, W1, quats) - Q
             if self.rotate_rows:
                 Rd = prob.group_velocity(Rd, quats)
-        return np.concatenate([Rd, self._constraint_rows(q1, V1, t1, h)])
+        r = np.concatenate([Rd, self._constraint_rows(q1, V1, t1, h)])
+        self._finite = bool(np.isfinite(r).all())
+        return r
 
     def _constraint_rows(self, q1, V1, t1, h):
         """g(q, t)/(h²β) on position rows, (A V - b)/(h γ k) on velocity-level rows (their
@@ -272,7 +283,7 @@ class GenAlpha(Stepper):
             raise StepFailed(f"genalpha: Newton diverged at t = {t1:.9g} (h = {h:.3g}): the iteration "
                              "matrix is not finite; reduce dt.")
         try:
-            self._solve = factorize(J, L)
+            self._solve = factorize(J, L, compiled=self.prob.compiled)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise StepFailed(f"genalpha: the iteration matrix is singular at t = {t1:.9g} "
                              f"(h = {h:.3g}): {exc}; check the constraints for redundancy or "
@@ -325,7 +336,7 @@ class GenAlpha(Stepper):
         tol = self.tol * (1.0 + np.linalg.norm(self.W))
         for it in range(self.nmax):
             r = self._residual(Wd1, lam, t1, h)
-            if not np.isfinite(r).all():
+            if not self._finite:
                 finite = False
                 break
             dz = -self._solve(r)
@@ -349,10 +360,8 @@ class GenAlpha(Stepper):
             why = "diverged (non-finite residual)" if not finite else f"did not converge in {self.nmax} iterations"
             raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
                              diverged=False)
-        W1, dX = self._state(Wd1, h)
+        q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))
         a1 = self._consts.a0 + self._consts.k * Wd1
-        q1, quats = self.prob.configuration(dX)
-        V1 = self.prob.model_velocity(W1, quats)
         self._prev = (h, self.Wd, self.lam)
         self.Wd, self.a, self.lam = Wd1, a1, lam
         self.finish(t1, q1, V1, W1, quats)

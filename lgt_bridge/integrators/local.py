@@ -258,6 +258,22 @@ class LocalProblem:
                          "(e.g. a division by zero, a singular configuration). The result keeps "
                          "every step before it.")
 
+    # --- generalized-α (the compiled backend fuses these into one kernel call each) -----
+    def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):
+        """(q, V, quats, W) at W = Wa + sv Ẇ, X = dXa + sp Ẇ[to_local] (generalized-α's state,
+        affine in its unknowns Ẇ)."""
+        W = Wa + sv * Wd
+        q, quats = self.configuration(dXa + sp * Wd[to_local])
+        return q, self.model_velocity(W, quats), quats, W
+
+    def ga_residual(self, Vd, Wd, r, W, quats):
+        """r = Ẇ - Ẇ(V̇) (in place); returns Σ r² (not finite when r is not)."""
+        r[:] = Wd - self.group_acceleration(np.asarray(Vd, dtype=float), W, quats)
+        if not np.isfinite(r).all():
+            return np.inf
+        with np.errstate(over="ignore"):
+            return float(r.dot(r))
+
     def to_local(self, d):
         """A vector in V's layout as X's layout (bodies: the same 6 numbers; vector part: rates)."""
         X = np.empty(self.nX)

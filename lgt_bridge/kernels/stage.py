@@ -105,6 +105,13 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
         X[j] *= h
     for j in range(nv):
         W[j] = W0[j] + h * W[j]
+    return tau_state(ns == 0, X, W, bt, vt, qk, pk, q, V, Xd, p)
+
+
+@njit(cache=True, error_model="numpy")
+def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p):
+    """τ, model velocity and local kinematics of every body at (X, W) (``start``: X = 0,
+    q = q_k); returns the largest |c| of the Cayley-chart bodies."""
     cmax = 0.0
     for b in range(bt.shape[0]):
         se3, cay, ro, xo = bt[b, SE3] == 1, bt[b, CAY] == 1, bt[b, ROT_ONLY] == 1, bt[b, XOFF]
@@ -117,7 +124,7 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
             cmax = max(cmax, math.sqrt(x0 * x0 + x1 * x1 + x2 * x2))
         else:
             d0, d1, d2, d3, phi, sh = rotvec_minus_one(x0, x1, x2)
-        if ns == 0:
+        if start:
             p0, p1, p2, p3 = k0, k1, k2, k3
             for c in range(3):
                 if not ro:
@@ -261,6 +268,42 @@ def stage(Vd, KX, KW, a, i, h, w, bt, vt, off):
         return 0.0
     Xd = KX[i] if i < KX.shape[0] else w[off[OXD]:off[OXD] + off[NX_]]
     return stage_state(KX, KW, a, i, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p)
+
+
+@njit(cache=True, error_model="numpy")
+def ga_state(Wd, sv, sp, Wa, dXa, tl, w, bt, vt, off):
+    """Generalized-α's state for the unknowns Ẇ (affine in them): W = Wa + sv Ẇ,
+    X = dXa + sp Ẇ[tl] (sp per entry of X: the chart scale; tl: X's entries in V's layout),
+    then τ, the model velocity and Ẋ of every body into the work array, as stage_state."""
+    X, W, q, V, W0, qk, pk, p = views(w, off)
+    for j in range(W.shape[0]):
+        W[j] = Wa[j] + sv * Wd[j]
+    for j in range(X.shape[0]):
+        X[j] = dXa[j] + sp[j] * Wd[tl[j]]
+    tau_state(False, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p)
+
+
+@njit(cache=True, error_model="numpy")
+def ga_residual(Vd, Wd, r, w, bt, off):
+    """r = Ẇ - Ẇ(V̇) at the state of the work array (generalized-α's unconstrained rows);
+    the sum of r² (inf or NaN when r is not finite)."""
+    X, W, q, V, W0, qk, pk, p = views(w, off)
+    convert(2, Vd, W, p, bt, r)
+    s = 0.0
+    for j in range(r.shape[0]):
+        r[j] = Wd[j] - r[j]
+        s += r[j] * r[j]
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def csr_matvec(indptr, indices, data, x, out):
+    """out = S x for a CSR matrix (scipy's per-call overhead is ~3 µs)."""
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            acc += data[k] * x[indices[k]]
+        out[i] = acc
 
 
 @njit(cache=True, error_model="numpy")
