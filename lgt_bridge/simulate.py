@@ -224,6 +224,9 @@ def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6,
         return FixedRK(prob, FIXED[method], projector), dt
     if method in ADAPTIVE:
         return AdaptiveRK(prob, ADAPTIVE[method](), rtol, atol, projector, first_step=dt), dt
+    if method == "radau5":
+        from .integrators.radau import Radau5
+        return Radau5(prob, rtol, atol, projector), dt
     if method == "genalpha":
         from .integrators.genalpha import GenAlpha
         return GenAlpha(prob, rho_inf=rho_inf, newton_tol=newton_tol), dt
@@ -356,7 +359,9 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
 
     method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5", "dop853" (adaptive: rtol/atol,
     dt = first step), "scipy:<Name>" (scipy solver inside macro steps of length dt),
-    "genalpha" (fixed dt, index-3 constraints, numerical damping ``rho_inf``).
+    "radau5" (implicit Radau IIA of order 5, adaptive: rtol/atol, dt = first step; for stiff
+    models such as PD-controlled robots), "genalpha" (fixed dt, index-3 constraints,
+    numerical damping ``rho_inf``).
     group: "SE3", "SO3xR3" or "auto"; chart: "exp", "cay" or "auto" (one value or one
     per body). "auto" picks per body what the model's structure needs
     (:mod:`lgt_bridge.auto`); ``stats["auto"]`` says what it chose and why, and
@@ -366,7 +371,7 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     before the first step (``stats["initial_projection"]`` says how far it moved);
     ``project=False`` turns both off.
     t_eval: output times; default: every step. Fixed-step methods land on them;
-    dopri5 and dop853 interpolate them with their continuous extension (through τ),
+    dopri5, dop853 and radau5 interpolate them with their continuous extension (through τ),
     so output times never shorten their steps.
     progress: None (default) shows a tqdm bar on stderr (simulated time, steps, f
     evaluations, current step size, rate) once the run has taken more than about 1 s,

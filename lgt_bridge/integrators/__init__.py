@@ -1,6 +1,7 @@
-"""Integrators of the bridge: RKMK (fixed and adaptive), scipy through τ, generalized-α."""
+"""Integrators of the bridge: RKMK (fixed and adaptive), Radau IIA, scipy through τ,
+generalized-α."""
 from .tableaux import ADAPTIVE, FIXED
 
-METHODS = tuple(FIXED) + tuple(ADAPTIVE) + ("genalpha",)
+METHODS = tuple(FIXED) + tuple(ADAPTIVE) + ("radau5", "genalpha")
 
 __all__ = ["METHODS"]

@@ -40,6 +40,8 @@ class CompiledProblem(LocalProblem):
         self._W0_src = None            # the array last copied into the W0 slot
         self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
         self._pending = None           # (i, t, ts) of that stage
+        self._xd = self.work[self.off[_k.OXD]:self.off[_k.OXD] + self.nX]     # the scratch Ẋ
+        self._tl = None                # X's entries in V's layout (rates)
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
@@ -110,6 +112,22 @@ class CompiledProblem(LocalProblem):
         Vd = np.asarray(self.model.f(q, V, t), dtype=float)
         self.n_f += 1
         return Xd, self.group_acceleration(Vd, self._W, p), q, V
+
+    def rates(self, X, W, t):
+        """[Ẋ, Ẇ] of the local ODE at (X, W) as one vector: the state kernel, the model's f
+        (on views of the work array) and the conversion kernel."""
+        if self._tl is None:
+            self._tl = np.rint(self.to_local(np.arange(self.nv, dtype=float))).astype(np.int64)
+            self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)
+        _k.ga_state(self._zv, 0.0, self._zx, W, X, self._tl, self.work, self.bt, self.vt, self.off)
+        Vd = self.model.f(self._q, self._V, t)
+        self.n_f += 1
+        if type(Vd) is not np.ndarray or Vd.dtype is not _F64:
+            Vd = np.ascontiguousarray(Vd, dtype=float)
+        out = np.empty(self.nX + self.nv)
+        out[:self.nX] = self._xd
+        _k.convert(2, Vd, self._W, self._p, self.bt, out[self.nX:])
+        return out
 
     # --- generalized-α ---------------------------------------------------------------
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):

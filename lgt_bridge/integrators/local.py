@@ -258,6 +258,11 @@ class LocalProblem:
                          "(e.g. a division by zero, a singular configuration). The result keeps "
                          "every step before it.")
 
+    def rates(self, X, W, t):
+        """[Ẋ, Ẇ] of the local ODE at (X, W) as one vector (the implicit methods' F)."""
+        Xd, Wd, _, _ = self.rhs(X, W, t)
+        return np.concatenate([Xd, Wd])
+
     # --- generalized-α (the compiled backend fuses these into one kernel call each) -----
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):
         """(q, V, quats, W) at W = Wa + sv Ẇ, X = dXa + sp Ẇ[to_local] (generalized-α's state,

@@ -1,0 +1,328 @@
+"""Radau IIA of order 5 on the local coordinates: the implicit, L-stable, stiffly accurate
+three-stage collocation method (Hairer & Wanner, Solving ODEs II, IV.8) run as RKMK on the
+local ODE y = (X, W) from X = 0,
+
+    Z_i = h Σ_j a_ij F(y_k + Z_i, t + c_j h),   F(X, W, t) = (dψ⁻¹_{-X}(W), Ẇ(f(τ(q_k, X), V, t))),
+    y_{k+1} = y_k + Z_3  (c_3 = 1),             q_{k+1} = τ(q_k, X_{k+1}).
+
+For stiff models (PD-controlled robots, stiff springs) whose explicit methods are held to
+tiny steps by stability: it takes steps sized by accuracy alone, at order 5.
+
+* Simplified Newton on the collocation system, with the Jacobian J = ∂F/∂y at the start of a
+  step (forward differences of F: nX + nv evaluations of f), transformed by the eigenvectors
+  of A⁻¹ into one real and one complex linear system of the size of y (Hairer's trick);
+  J and their LU factors are kept across steps while Newton contracts and h is unchanged.
+* Error estimate of Hairer's RADAU5: err = (γ/h - J)⁻¹ (F(y_k) + Σ e_i Z_i / h), from the
+  embedded third-order formula with an explicit first node; predictive (Gustafsson) step-size
+  control. Starting guess: the previous step's collocation polynomial, extrapolated.
+* Dense output: the collocation polynomial on (X, W) within the step, through τ of the step's
+  base. Constrained models are projected after each step, as with the explicit methods.
+
+The tableau is computed here from its nodes (a_ij = ∫_0^{c_i} ℓ_j, the eigen-decomposition of
+A⁻¹, the error weights from the embedded formula's order conditions); tests/test_radau.py
+checks it against the order conditions and Hairer's published error weights.
+"""
+import math
+
+import numpy as np
+
+from ..errors import ChartDomainError
+from .base import StepFailed, Stepper
+from .rkmk import CAYLEY_LIMIT
+
+_EPS = np.finfo(float).eps
+
+
+def _tableau():
+    s6 = math.sqrt(6.0)
+    c = np.array([(4.0 - s6) / 10.0, (4.0 + s6) / 10.0, 1.0])
+    V = np.vander(c, 3, increasing=True)                   # V[i, k] = c_i^k
+    integ = np.array([[ci ** (k + 1) / (k + 1) for k in range(3)] for ci in c])
+    A = integ @ np.linalg.inv(V)                            # a_ij = ∫_0^{c_i} ℓ_j (collocation)
+    w, v = np.linalg.eig(np.linalg.inv(A))
+    r = int(np.argmin(np.abs(w.imag)))
+    k = int(np.argmax(w.imag))
+    gamma, mu = float(w[r].real), complex(w[k])
+    # A⁻¹ T = T diag(γ, [[α, β], [-β, α]]) with T = [v_r, Re v_μ, Im v_μ]: on u = w_2 + i w_3
+    # the 2x2 block multiplies by conj(μ) = α - iβ
+    T = np.column_stack([v[:, r].real, v[:, k].real, v[:, k].imag])
+    TI = np.linalg.inv(T)
+    # embedded formula: weight 1/γ on an explicit node at 0, order 3 -> error weights E with
+    # err = (γ/h - J)⁻¹ (F_0 + Eᵀ Z / h)
+    g0 = 1.0 / gamma
+    bhat = np.linalg.solve(V.T, [1.0 - g0, 0.5, 1.0 / 3.0])
+    E = np.linalg.solve(A.T, bhat - A[-1]) / g0
+    # dense output: Z(θ) = Σ_k θ^(k+1) Σ_i P[i, k] Z_i, the cubic through (0, 0) and (c_i, Z_i)
+    P = np.linalg.inv(V * c[:, None]).T
+    return c, A, gamma, mu.conjugate(), T, TI, E, P
+
+
+C, A, GAMMA, MU, T, TI, E, P = _tableau()
+_TI_C = TI[1] + 1j * TI[2]
+
+
+def _rms(x):
+    return math.sqrt(float(np.mean(x * x))) if x.size else 0.0
+
+
+class Radau5(Stepper):
+    """Radau IIA (5) with error control on (X, W); see the module docstring."""
+
+    adaptive = True
+    dense_capable = True
+    NEWTON_MAXITER = 6
+    MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
+    DIVERGED_HINT = ("Lower rtol/atol or the first step, or check the model's f there. The result "
+                     "keeps every step before it.")
+
+    def __init__(self, problem, rtol, atol, projector=None):
+        super().__init__(problem, projector)
+        self.rtol, self.atol = rtol, atol
+        self.nX = problem.nX
+        self.n = problem.nX + problem.nv
+        self.newton_tol = max(10.0 * _EPS / max(rtol, 1e-300), min(0.03, math.sqrt(rtol)))
+        self.J = None
+        self._jac_current = False
+        self._lu = None                        # (h, real LU, complex LU)
+        self.n_jacobians = 0
+        self.n_lu = 0
+        self.dense = None
+        self._f0 = None                        # F(0, W_k) at the current step's start
+        self._h_old = self._err_old = None
+        self._rejected = False
+        self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
+
+    # --- state -----------------------------------------------------------------------
+    def set_state(self, q, V, W=None, quats=None, copy=True):
+        super().set_state(q, V, W, quats, copy)
+        self._f0 = None
+
+    def restore(self, snap):
+        super().restore(snap)
+        self.dense = None
+
+    def _F(self, X, W, t):
+        F = self.prob.rates(np.ascontiguousarray(X), W, t)
+        if not np.isfinite(F).all():
+            return None
+        return F
+
+    def initial_step(self, t):
+        """Hairer-Nørsett-Wanner's starting step (II.4) for the embedded order 3."""
+        y0 = np.concatenate([np.zeros(self.nX), self.W])
+        f0 = self._start_rates(t)
+        sc = self.atol + self.rtol * np.abs(y0)
+        d0, d1 = _rms(y0 / sc), _rms(f0 / sc)
+        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+        f1 = self._F(h0 * f0[:self.nX], self.W + h0 * f0[self.nX:], t + h0)
+        if f1 is None:
+            return h0
+        d2 = _rms((f1 - f0) / sc) / h0
+        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** 0.25
+        return min(100 * h0, h1)
+
+    def _start_rates(self, t):
+        if self._f0 is None:
+            f0 = self._F(np.zeros(self.nX), self.W, t)
+            if f0 is None:
+                raise StepFailed(f"radau5: the model's f is not finite at the step's start t = {t:.9g} "
+                                 "(|V| = {:.3g}); check the model's f there.".format(float(np.abs(self.V).max())))
+            self._f0 = f0
+        return self._f0
+
+    # --- Jacobian and factors ---------------------------------------------------------
+    def _jacobian(self, t, f0):
+        """Forward differences of F at (0, W_k): nX + nv evaluations of f."""
+        n, nX, Wk = self.n, self.nX, self.W
+        J = np.empty((n, n))
+        X = np.zeros(nX)
+        for j in range(n):
+            if j < nX:
+                d = math.sqrt(_EPS)
+                X[j] = d
+                F = self._F(X, Wk, t)
+                X[j] = 0.0
+            else:
+                d = math.sqrt(_EPS) * max(1.0, abs(Wk[j - nX]))
+                W = Wk.copy()
+                W[j - nX] += d
+                F = self._F(X, W, t)
+            if F is None:
+                raise StepFailed(f"radau5: the model's f is not finite next to the state at t = {t:.9g} "
+                                 "(Jacobian by differences); check the model's f there.")
+            J[:, j] = (F - f0) / d
+        self.J = J
+        self._jac_current = True
+        self._lu = None
+        self.n_jacobians += 1
+
+    def _factors(self, h):
+        """LU factors of γ/h - J and conj(μ)/h - J as solvers (LAPACK's getrf/getrs called
+        directly: scipy.linalg.lu_solve's wrappers cost ~5 µs a call, getrs ~1 µs)."""
+        if self._lu is not None and self._lu[0] == h:
+            return self._lu[1], self._lu[2]
+        from scipy.linalg import lapack
+        n = self.n
+        solvers = []
+        for mu, getrf, getrs in ((GAMMA, lapack.dgetrf, lapack.dgetrs), (MU, lapack.zgetrf, lapack.zgetrs)):
+            lu, piv, info = getrf(mu / h * np.eye(n) - self.J, overwrite_a=True)
+            if info != 0 or not np.isfinite(lu).all():
+                raise StepFailed(f"radau5: the Newton matrix is singular or not finite at h = {h:.3g} "
+                                 "(the model's Jacobian); reduce the first step or check the model's f.")
+            solvers.append(_Solver(getrs, lu, piv))
+        self._lu = (h, *solvers)
+        self.n_lu += 1
+        return solvers
+
+    # --- one step ---------------------------------------------------------------------
+    def _guess(self, t, h):
+        """Z at the new nodes from the last step's collocation polynomial (X: relative to
+        its end, which is this step's base), else 0."""
+        d = self.dense
+        if d is None or abs(d.t1 - t) > 1e-12 * max(1.0, abs(t)):
+            return np.zeros((3, self.n))
+        th = 1.0 + C * h / d.h
+        Y = d.local(th)                        # (3, n): (X, W) of the last step's polynomial
+        Y1 = d.local(np.array([1.0]))[0]
+        return Y - Y1
+
+    def _collocation(self, t, h, Z0, scale, lr, lc):
+        """Simplified Newton on the collocation system: (converged, iterations, Z, rate) or
+        raises _Cayley."""
+        nX, Wk = self.nX, self.W
+        Wt = TI @ Z0
+        Z = Z0
+        F = np.empty((3, self.n))
+        old, rate = None, None
+        for k in range(self.NEWTON_MAXITER):
+            for i in range(3):
+                X = Z[i, :nX]
+                if self.climit < np.inf:
+                    c = self.prob.max_cayley(X)
+                    if c > self.climit:
+                        raise _Cayley(c)
+                Fi = self._F(X, Wk + Z[i, nX:], t + C[i] * h)
+                if Fi is None:
+                    return False, k + 1, Z, rate
+                F[i] = Fi
+            self.n_newton += 1
+            dr = lr(TI[0] @ F - (GAMMA / h) * Wt[0])
+            dc = lc(_TI_C @ F - (MU / h) * (Wt[1] + 1j * Wt[2]))
+            dW = np.stack([dr, dc.real, dc.imag])
+            size = _rms(dW / scale)
+            if old is not None:
+                rate = size / old
+                if rate >= 1.0 or rate ** (self.NEWTON_MAXITER - k) / (1.0 - rate) * size > self.newton_tol:
+                    return False, k + 1, Z, rate
+            Wt = Wt + dW
+            Z = T @ Wt
+            if size == 0.0 or (rate is not None and rate / (1.0 - rate) * size < self.newton_tol):
+                return True, k + 1, Z, rate
+            old = size
+        return False, self.NEWTON_MAXITER, Z, rate
+
+    def attempt(self, t, h):
+        try:
+            return self._attempt(t, h)
+        except _Cayley as lim:
+            self.n_rejected += 1
+            self._rejected = True
+            return False, 0.8 * h * math.atan(CAYLEY_LIMIT) / math.atan(lim.c)
+
+    def _attempt(self, t, h):
+        nX, Wk = self.nX, self.W
+        f0 = self._start_rates(t)
+        yk = np.concatenate([np.zeros(nX), Wk])
+        scale = self.atol + self.rtol * np.abs(yk)
+        if self.J is None:
+            self._jacobian(t, f0)
+        while True:
+            lr, lc = self._factors(h)
+            ok, n_iter, Z, rate = self._collocation(t, h, self._guess(t, h), scale, lr, lc)
+            if ok:
+                break
+            if self._jac_current:              # Newton fails with a fresh Jacobian: shorter step
+                self.n_rejected += 1
+                self._rejected = True
+                self._lu = None
+                return False, 0.5 * h
+            self._jacobian(t, f0)
+        y1 = yk + Z[2]
+        ZE = (E @ Z) / h
+        err = lr(f0 + ZE)
+        esc = self.atol + self.rtol * np.maximum(np.abs(yk), np.abs(y1))
+        en = _rms(err / esc)
+        if en > 1.0 and (self._rejected or self._h_old is None):
+            # the estimate of the first or a rejected step, filtered once more (stiff components)
+            Fe = self._F(err[:nX], Wk + err[nX:], t)
+            if Fe is not None:
+                en = _rms(lr(Fe + ZE) / esc)
+        safety = 0.9 * (2 * self.NEWTON_MAXITER + 1) / (2 * self.NEWTON_MAXITER + n_iter)
+        if not math.isfinite(en) or en > 1.0:
+            self.n_rejected += 1
+            self._rejected = True
+            fac = self.MIN_FACTOR if not math.isfinite(en) else max(self.MIN_FACTOR, safety * en ** -0.25)
+            return False, h * fac
+        # accepted
+        X1, W1 = y1[:nX].copy(), y1[nX:].copy()
+        q1, V1 = self.prob.state_at(X1, W1)
+        self.dense = RadauDense(self, t, h, Z)
+        recompute = n_iter > 2 and rate is not None and rate > 1e-3
+        if self._err_old is None or self._h_old is None or en == 0.0:
+            mult = 1.0
+        else:
+            mult = h / self._h_old * (self._err_old / en) ** 0.25
+        fac = min(1.0, mult) * (en ** -0.25 if en > 0.0 else self.MAX_FACTOR)
+        fac = min(self.MAX_FACTOR, safety * fac)
+        if not recompute and fac < 1.2:
+            fac = 1.0                           # keep the factors
+        self._h_old, self._err_old = h, en
+        self._rejected = False
+        self.finish(t + h, q1, V1, W1)
+        if recompute:
+            self.J = None                       # a fresh Jacobian at the next step's start
+        self._jac_current = False
+        return True, h * fac
+
+
+class _Solver:
+    """x = A⁻¹ b from A's LAPACK LU factors."""
+
+    def __init__(self, getrs, lu, piv):
+        self.getrs, self.lu, self.piv = getrs, lu, piv
+
+    def __call__(self, b):
+        return self.getrs(self.lu, self.piv, b)[0]
+
+
+class _Cayley(Exception):
+    def __init__(self, c):
+        self.c = c
+
+
+class RadauDense:
+    """The collocation polynomial of one accepted step on (X, W), through τ of the step's
+    own base (valid after the stepper has moved on)."""
+
+    def __init__(self, stepper, t, h, Z):
+        self.st, self.t0, self.h, self.t1 = stepper, t, h, t + h
+        self.nX, self.W0 = stepper.nX, stepper.W
+        self.coef = P.T @ Z                     # (3, n): Z(θ) = Σ_k θ^(k+1) coef[k]
+        self.base = stepper.prob.snapshot()
+
+    def local(self, th):
+        """(X, W) at the step fractions ``th`` (array): rows of [X, W]."""
+        th = np.asarray(th, float)[:, None]
+        Zt = th * (self.coef[0] + th * (self.coef[1] + th * self.coef[2]))
+        Zt[:, self.nX:] += self.W0
+        return Zt
+
+    def __call__(self, t):
+        y = self.local([(t - self.t0) / self.h])[0]
+        prob = self.st.prob
+        snap = prob.snapshot()
+        prob.restore(self.base)
+        try:
+            return prob.state_at(y[:self.nX], y[self.nX:])
+        finally:
+            prob.restore(snap)
