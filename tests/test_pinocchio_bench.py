@@ -181,3 +181,18 @@ def test_tiny_bench_run_on_a_real_robot(tmp_path):
     assert ref["scenario"] == "pd"
     assert by["genalpha"]["success"] and by["genalpha"]["pose_error"] < 1e-2
     assert not by["rkmk4"]["success"] or not by["rkmk4"]["pose_error"] < 1e-2
+
+
+def test_radau5_on_a_pd_robot_against_the_users_dop853():
+    """solo12 under PD (kp = 1000): radau5 against scipy DOP853 on Pinocchio's own (q, v) at
+    1e-12 (an independent reference), with the model's analytic Jacobian, and at a fraction of
+    dopri5's evaluations (7205 at 1e-8, held there by stability; radau5: 1312 SO3xR3, 1770 SE3)."""
+    pytest.importorskip("example_robot_data", reason=NEEDS_LOADERS)
+    model, T = bench.load_scene("pinocchio_robot:solo12", scenario="pd")
+    m, q0, v0 = pb.robot_state("solo12")
+    q_ref, _ = bl.dop853_renorm(m, q0, v0, T, 1e-12, tau=pb.pd_controller("solo12"))
+    for group in ("SO3xR3", "SE3"):
+        r = simulate(model, (0, T), method="radau5", group=group, rtol=1e-8, atol=1e-8)
+        assert r.success
+        assert bench.pose_error(model, r.q[-1], q_ref) < 1e-8
+        assert r.stats["n_f"] < 2500 and r.stats["n_jacobians"] < 20, r.stats

@@ -91,6 +91,15 @@ class Radau5(Stepper):
         self._h_old = self._err_old = None
         self._rejected = False
         self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
+        m = problem.model
+        # the model's M, C_t, K_t give J exactly on unconstrained models (a constrained model's
+        # f solves for its constraint forces: its J is differenced)
+        self._analytic = (not m.n_constraints and m.has_mass_matrix
+                          and callable(getattr(m, "iteration_matrix", None)))
+        self._kin = None
+        if self._analytic:
+            from .genalpha_matrix import Kinematics
+            self._kin = Kinematics(problem)
 
     # --- state -----------------------------------------------------------------------
     def set_state(self, q, V, W=None, quats=None, copy=True):
@@ -132,7 +141,19 @@ class Radau5(Stepper):
 
     # --- Jacobian and factors ---------------------------------------------------------
     def _jacobian(self, t, f0):
-        """Forward differences of F at (0, W_k): nX + nv evaluations of f."""
+        """J = ∂F/∂y at (0, W_k): from the model's own derivatives when it has them
+        (:func:`model_jacobian`), else forward differences of F (nX + nv evaluations of f)."""
+        if self._analytic:
+            J = model_jacobian(self.prob, self._kin, self.q, self.V, self.W, f0, t)
+            if np.isfinite(J).all():
+                self.J = J
+                self._jac_current = True
+                self._lu = None
+                self.n_jacobians += 1
+                return
+        self._fd_jacobian(t, f0)
+
+    def _fd_jacobian(self, t, f0):
         n, nX, Wk = self.n, self.nX, self.W
         J = np.empty((n, n))
         X = np.zeros(nX)
@@ -283,6 +304,69 @@ class Radau5(Stepper):
             self.J = None                       # a fresh Jacobian at the next step's start
         self._jac_current = False
         return True, h * fac
+
+
+def model_jacobian(prob, kin, q, V, W, f0, t):
+    """∂F/∂y at y = (0, W) of the local ODE (step start: q = q_k, V, W its velocities, f0 =
+    F there), from the model's M, C_t = -∂Q/∂V and K_t = ∂(M V̇ - Q)/∂z
+    (``iteration_matrix``; z = (δθ body, δr inertial) increments of SO(3)xR³), for an
+    unconstrained model, where δV̇ = -M⁻¹ (K_t δz + C_t δV). A body's local increment δX moves
+    it by ξ = dψ_0 δX (body frame). SO(3)xR³ and rotation-only bodies, vector and circle
+    coordinates: z = ξ, V = W, Ẇ = V̇. SE(3) bodies (W = (ω, u = Rᵀṙ)): z = (ξ_ω, R ξ_v),
+    V = (ω, R u) with ∂(R u)/∂ξ_ω = -R ũ, and Ẇ_v = Rᵀ V̇_v - ω × u with ∂/∂ξ_ω = (Rᵀ V̇_v)~,
+    ∂/∂ω = ũ, ∂/∂u = -ω~. The kinematic rows ∂Ẋ/∂X by differences of dψ⁻¹ (no f), ∂Ẋ/∂W =
+    the chart scale. tests/test_radau.py holds it against differences of F."""
+    from ..groups._vec import hat
+    m = prob.model
+    nX, nv = prob.nX, len(W)
+    quats = prob.start_quats
+    mats = [m.iteration_matrix(q, V, t, *c) for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    M, Ct, Kt = (x.toarray() if hasattr(x, "toarray") else np.asarray(x, float) for x in mats)
+    Vd = prob.model_acceleration(f0[nX:], W, quats)
+    Zx, Vx, Ex = np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((nv, nv))
+    Vw, Pr, Ew = np.eye(nv), np.eye(nv), np.zeros((nv, nv))
+    if len(kin.vector_v):
+        Zx[kin.vector_v, kin.vector_v] = 1.0
+    Rs = iter(kin.rotations(quats))
+    for s, dpsi in zip(prob.sets, kin.dpsi):
+        v = s.vidx
+        nb, k = v.shape
+        D0 = dpsi(np.zeros((nb, k)))                             # ξ = dψ_0 δX
+        ix = (v[:, :, None], v[:, None, :])
+        if not s.se3:
+            Zx[ix] = D0
+            continue
+        R = next(Rs)
+        w, u = W[s.wang], W[s.wlin]
+        blk = np.zeros((nb, 6, 6))
+        blk[:, :3, :3] = np.eye(3)
+        blk[:, 3:, 3:] = R
+        Zx[ix] = blk @ D0
+        Vw[ix] = blk
+        Pr[ix] = np.transpose(blk, (0, 2, 1))
+        blk = np.zeros((nb, 6, 6))
+        blk[:, 3:, :3] = -R @ hat(u)
+        Vx[ix] = blk @ D0
+        blk = np.zeros((nb, 6, 6))
+        blk[:, 3:, :3] = hat(np.einsum("bji,bj->bi", R, Vd[s.wlin]))
+        Ex[ix] = blk @ D0
+        blk = np.zeros((nb, 6, 6))
+        blk[:, 3:, :3] = hat(u)
+        blk[:, 3:, 3:] = -hat(w)
+        Ew[ix] = blk
+    MiK, MiC = np.split(np.linalg.solve(M, np.hstack([Kt, Ct])), 2, axis=1)
+    tl = np.rint(prob.to_local(np.arange(nv, dtype=float))).astype(int)
+    J = np.zeros((nX + nv, nX + nv))
+    J[nX:, :nX] = (Ex - Pr @ (MiK @ Zx + MiC @ Vx))[:, tl]
+    J[nX:, nX:] = Ew - Pr @ (MiC @ Vw)
+    J[np.arange(nX), nX + tl] = prob.chart_scale
+    d = math.sqrt(_EPS)
+    X = np.zeros(nX)
+    for j in range(nX):
+        X[j] = d
+        J[:nX, j] = (prob.kinematics(X, W) - f0[:nX]) / d
+        X[j] = 0.0
+    return J
 
 
 class _Solver:
