@@ -485,7 +485,9 @@ CASES = [
     # second-order update: measured 1.6e-5 at h = 1e-3 (Exudyn's own GA, first order on ODE1
     # coupling: 6.8e-3); the bound keeps the default 2e-3
     Case("ode1_controller", ode1_controller, cls=6, ref_solver=RK67, ref_steps=50, ref_order=6),
+    # radau5 at 1e-10: 3.6e-5 measured (its error estimate sees the penalty force's kink at
+    # contact less sharply than the explicit pairs'; it is meant for smooth stiff models)
     Case("sphere_contact", sphere_contact, cls=7, ref_steps=4000, ref_order=0, ga_steps=400,
-         bounds={"dopri5": 1e-5, "dop853": 3e-5}),
+         bounds={"dopri5": 1e-5, "dop853": 3e-5, "radau5": 1e-4}),
 ]
 BY_NAME = {c.name: c for c in CASES}

@@ -9,7 +9,7 @@ Exudyn's own converged solution (see exudyn_joint_models.py):
 Bounds, from measurements with exudyn 1.13.6 (errors are max |Δ| of the state_at_end
 vector relative to its size; the reference tolerance ``tol`` is 2e-10 … 1e-9):
 
-* dopri5 / dop853 at rtol = atol = 1e-10: measured 3e-12 … 3e-10 on every case whose
+* dopri5 / dop853 / radau5 at rtol = atol = 1e-10: measured 3e-12 … 3e-10 on every case whose
   physics the bridge got right; bound max(10·tol, 2e-9). Wrong physics is far outside:
   the bridge's position projection as of writing (Gauss-Newton steps, each M-orthogonal
   at its own iterate) is 3e-2 off; projecting EP nodes as RotVecLG ones is 3.7e-4 off.
@@ -28,10 +28,11 @@ exu = pytest.importorskip("exudyn")
 import exudyn_joint_models as jm  # noqa: E402
 from lgt_exudyn import ExudynModel, SolveDynamic  # noqa: E402
 
-ADAPTIVE = {"dopri5": dict(rtol=1e-10, atol=1e-10), "dop853": dict(rtol=1e-10, atol=1e-10)}
+ADAPTIVE = {"dopri5": dict(rtol=1e-10, atol=1e-10), "dop853": dict(rtol=1e-10, atol=1e-10),
+            "radau5": dict(rtol=1e-10, atol=1e-10)}
 ADAPTIVE_BOUND = 2e-9           # measured ≤ 3e-10 (see module docstring)
 GENALPHA_FACTOR = 3.0           # measured ratio to Exudyn's own generalized-α ≤ 1.5
-METHODS = ["dopri5", "dop853", "genalpha"]
+METHODS = ["dopri5", "dop853", "radau5", "genalpha"]
 IDS = [c.name for c in jm.CASES]
 
 
@@ -140,7 +141,7 @@ def test_redundant_constraints_reported(case):
 @pytest.mark.parametrize("case", of_kind("inconsistent"))
 def test_inconsistent_start_ends_on_the_constraints(case):
     """The final state satisfies Exudyn's joint equations: positions to 1e-9 for every
-    method (measured ≤ 1e-12), velocities to 1e-8 for dopri5/dop853 (measured ≤ 1e-15);
+    method (measured ≤ 1e-12), velocities to 1e-8 for dopri5/dop853/radau5 (measured ≤ 1e-15);
     index-3 generalized-α leaves an O(h²) velocity residual, bounded by 5 × that of
     Exudyn's own generalized-α at the same step (measured ratio 0.4 … 1.8)."""
     mbs = case.build()[0]

@@ -36,8 +36,9 @@ import lgt_exudyn  # noqa: E402
 
 import exudyn_special_models as sm  # noqa: E402
 
-METHODS = {"dopri5": dict(rtol=1e-10, atol=1e-10), "dop853": dict(rtol=1e-10, atol=1e-10), "genalpha": {}}
-DEFAULT_BOUNDS = {"dopri5": 1e-7, "dop853": 1e-7, "genalpha": 2e-3}
+METHODS = {"dopri5": dict(rtol=1e-10, atol=1e-10), "dop853": dict(rtol=1e-10, atol=1e-10),
+           "radau5": dict(rtol=1e-10, atol=1e-10), "genalpha": {}}
+DEFAULT_BOUNDS = {"dopri5": 1e-7, "dop853": 1e-7, "radau5": 1e-7, "genalpha": 2e-3}
 SMOOTH = [c for c in sm.CASES if c.cls != 7]
 CONTACT = [c for c in sm.CASES if c.cls == 7]
 
@@ -80,8 +81,8 @@ def test_contact_runs_and_matches_exudyn(case, method):
     """Data coordinates (contact): Exudyn's discontinuous iteration (PostNewton) runs at the
     end of every step; a step over which the contact state changes is retried shorter
     until the switch is located, then redone with the new state. Measured against the
-    converged generalized-alpha (agreement 1.5e-7): dopri5 4e-7, dop853 9.8e-6 (both at
-    rtol 1e-10: the penalty force has a kink at contact, which the error control
+    converged generalized-alpha (agreement 1.5e-7): dopri5 4e-7, dop853 9.8e-6, radau5 3.6e-5
+    (all at rtol 1e-10: the penalty force has a kink at contact, which the error control
     resolves), genalpha 1.2e-4 at h = 5e-4."""
     mbs = run_bridge(case, method)
     err, where = sm.discrepancy(sm.state_blocks(mbs, case.compare_nodes), sm.exudyn_reference(case).blocks)

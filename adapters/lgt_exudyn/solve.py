@@ -47,7 +47,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
       ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``,
       are not capped at h, and give Exudyn's output steps by dense output. False: dopri5/
       dop853 take fixed steps of h with their own tableau (as Exudyn's DOPRI5 does), unless
-      ``rtol``/``atol`` are passed here, which always select error control.
+      ``rtol``/``atol`` are passed here, which always select error control. radau5 (implicit,
+      for stiff models) always controls its step by the tolerances.
     - ``minimumStepSize`` (error control: a step the controller would shrink below it fails
       with StepError), ``initialStepSize`` (error control: the first trial step when > 0;
       0: the bridge's own starting-step estimate).
@@ -81,12 +82,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # automaticStepSize=False: Exudyn's DOPRI5 steps at h_out; so does ours, unless the
     # caller asked for error control by passing tolerances
     fixed_tableau = method in ADAPTIVE and not auto_step and rtol is None and atol is None
-    controlled = method in ADAPTIVE and not fixed_tableau
+    # radau5 has no fixed-step form: it is error-controlled whatever automaticStepSize says
+    controlled = (method in ADAPTIVE and not fixed_tableau) or method == "radau5"
     adaptive = controlled or str(method).startswith("scipy:")
     tol_source = "given"
     if rtol is None or atol is None:
         tol_source = "default"
-        if adaptive and auto_step:
+        if adaptive and (auto_step or method == "radau5"):
             tol_source = "timeIntegration.relative/absoluteTolerance"
             rtol = rtol if rtol is not None else float(ti.relativeTolerance)
             atol = atol if atol is not None else float(ti.absoluteTolerance)
