@@ -215,18 +215,20 @@ def _parser():
                        "mbs.SolveDynamic call it makes is integrated by the bridge (the script's\n"
                        "sensors, solution file and final state keep working). Other solver calls and\n"
                        "hand-written loops (e.g. a Pinocchio aba loop) run as written.",
-                       epilog="tolerances: adaptive methods (dopri5, dop853, scipy:*) use --rtol/--atol\n"
+                       epilog="tolerances: adaptive methods (dopri5, dop853, radau5, scipy:*) use --rtol/--atol\n"
                        "  (--rtol 0: pure absolute tolerance); when absent, the script's own\n"
                        "  simulationSettings.timeIntegration.relativeTolerance/absoluteTolerance\n"
                        "  (Exudyn's defaults: 1e-8, 1e-8) if its automaticStepSize is True. With\n"
                        "  automaticStepSize False and no --rtol/--atol, dopri5 and dop853 take fixed\n"
-                       "  steps of (endTime-startTime)/numberOfSteps (scipy:* use rtol=1e-6, atol=1e-8).\n"
+                       "  steps of (endTime-startTime)/numberOfSteps (radau5 keeps the settings'\n"
+                       "  tolerances; scipy:* use rtol=1e-6, atol=1e-8).\n"
                        "  Fixed-step methods (euler, rkmk2, rkmk4, genalpha) step at that interval.\n"
                        "  minimumStepSize, initialStepSize and startTime are honoured as by Exudyn.\n"
                        "Each routed call prints one line: method, group, chart, tolerances, steps.")
     r.add_argument("script", help="the legacy script (.py)")
     r.add_argument("--method", default="dopri5", metavar="METHOD",
-                   help="euler, rkmk2, rkmk4, genalpha (fixed step); dopri5, dop853 (adaptive); "
+                   help="euler, rkmk2, rkmk4, genalpha (fixed step); dopri5, dop853, radau5 (adaptive; "
+                   "radau5 implicit, for stiff models); "
                    "scipy:<Name> with Name in RK23, RK45, DOP853, Radau, BDF, LSODA (default dopri5)")
     r.add_argument("--group", default="SE3", choices=_GROUPS,
                    help="Lie group of the local coordinates; auto: per body, what the model needs "
@@ -247,7 +249,7 @@ def _parser():
     b.add_argument("scene", help="a scene name (listed below), path/to/file.py:function returning "
                    "(model, t_end), or 'extremes' for the extremes suite's report")
     b.add_argument("--methods", default="rkmk4,dopri5",
-                   help="comma-separated: euler, rkmk2, rkmk4, genalpha, dopri5, dop853, scipy:<Name> "
+                   help="comma-separated: euler, rkmk2, rkmk4, genalpha, dopri5, dop853, radau5, scipy:<Name> "
                    "(default rkmk4,dopri5)")
     b.add_argument("--groups", default="SE3,SO3xR3", help="comma-separated: SE3, SO3xR3, auto "
                    "(default SE3,SO3xR3)")
