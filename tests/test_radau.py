@@ -101,6 +101,14 @@ def test_model_jacobian_equals_differences_of_F(group, chart, make):
     assert np.abs(Ja - Jd).max() <= 2e-6 * max(1.0, np.abs(Jd).max())
 
 
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_model_jacobian_of_a_large_model_is_sparse_and_equals_differences(group):
+    """40 bodies (480 unknowns): assembled from per-body blocks in scipy.sparse, M by SuperLU."""
+    Ja, Jd = _jacobians(scenes.free_bodies(40, seed=6), group, "exp")
+    assert hasattr(Ja, "tocsc") and Ja.nnz < 0.05 * Jd.size
+    assert np.abs(Ja.toarray() - Jd).max() <= 2e-6 * max(1.0, np.abs(Jd).max())
+
+
 # --- stiff ------------------------------------------------------------------------------------
 def damped_stiff_body(k=1e8):
     """A spinning body held at two points by stiff, critically damped zero-length springs."""

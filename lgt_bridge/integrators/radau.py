@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import ChartDomainError
 from .base import StepFailed, Stepper
+from .genalpha_matrix import SPARSE_MIN
 from .rkmk import CAYLEY_LIMIT
 
 _EPS = np.finfo(float).eps
@@ -83,7 +84,8 @@ class Radau5(Stepper):
         self.newton_tol = max(10.0 * _EPS / max(rtol, 1e-300), min(0.03, math.sqrt(rtol)))
         self.J = None
         self._jac_current = False
-        self._lu = None                        # (h, real LU, complex LU)
+        self._lu = None                        # (h, real solver, complex solver)
+        self._Jsp = None                       # (J, its sparse copy) on large systems
         self.n_jacobians = 0
         self.n_lu = 0
         self.dense = None
@@ -145,7 +147,7 @@ class Radau5(Stepper):
         (:func:`model_jacobian`), else forward differences of F (nX + nv evaluations of f)."""
         if self._analytic:
             J = model_jacobian(self.prob, self._kin, self.q, self.V, self.W, f0, t)
-            if np.isfinite(J).all():
+            if np.isfinite(J.data if hasattr(J, "tocsc") else J).all():
                 self.J = J
                 self._jac_current = True
                 self._lu = None
@@ -182,8 +184,10 @@ class Radau5(Stepper):
         directly: scipy.linalg.lu_solve's wrappers cost ~5 µs a call, getrs ~1 µs)."""
         if self._lu is not None and self._lu[0] == h:
             return self._lu[1], self._lu[2]
-        from scipy.linalg import lapack
         n = self.n
+        if n > SPARSE_MIN:
+            return self._sparse_factors(h)
+        from scipy.linalg import lapack
         solvers = []
         for mu, getrf, getrs in ((GAMMA, lapack.dgetrf, lapack.dgetrs), (MU, lapack.zgetrf, lapack.zgetrs)):
             lu, piv, info = getrf(mu / h * np.eye(n) - self.J, overwrite_a=True)
@@ -194,6 +198,23 @@ class Radau5(Stepper):
         self._lu = (h, *solvers)
         self.n_lu += 1
         return solvers
+
+    def _sparse_factors(self, h):
+        """Large systems: J kept sparse (bodies that do not interact give blocks), SuperLU."""
+        from scipy import sparse
+        from scipy.sparse.linalg import splu
+        if self._Jsp is None or self._Jsp[0] is not self.J:
+            self._Jsp = (self.J, sparse.csc_matrix(self.J))
+        J, eye = self._Jsp[1], sparse.identity(self.n, format="csc")
+        try:
+            lr = splu((GAMMA / h) * eye - J)
+            lc = splu((MU / h) * eye - J.astype(complex))
+        except RuntimeError as exc:
+            raise StepFailed(f"radau5: the Newton matrix is singular at h = {h:.3g} ({exc}); reduce the "
+                             "first step or check the model's f.") from None
+        self._lu = (h, lr.solve, lc.solve)
+        self.n_lu += 1
+        return lr.solve, lc.solve
 
     # --- one step ---------------------------------------------------------------------
     def _guess(self, t, h):
@@ -315,58 +336,115 @@ def model_jacobian(prob, kin, q, V, W, f0, t):
     coordinates: z = ξ, V = W, Ẇ = V̇. SE(3) bodies (W = (ω, u = Rᵀṙ)): z = (ξ_ω, R ξ_v),
     V = (ω, R u) with ∂(R u)/∂ξ_ω = -R ũ, and Ẇ_v = Rᵀ V̇_v - ω × u with ∂/∂ξ_ω = (Rᵀ V̇_v)~,
     ∂/∂ω = ũ, ∂/∂u = -ω~. The kinematic rows ∂Ẋ/∂X by differences of dψ⁻¹ (no f), ∂Ẋ/∂W =
-    the chart scale. tests/test_radau.py holds it against differences of F."""
+    the chart scale. Dense for small models, scipy.sparse (per-body blocks, M by SuperLU) for
+    large ones. tests/test_radau.py holds it against differences of F."""
     from ..groups._vec import hat
     m = prob.model
     nX, nv = prob.nX, len(W)
+    big = nX + nv > SPARSE_MIN
     quats = prob.start_quats
-    mats = [m.iteration_matrix(q, V, t, *c) for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
-    M, Ct, Kt = (x.toarray() if hasattr(x, "toarray") else np.asarray(x, float) for x in mats)
+    kw = {"sparse": big} if _accepts_sparse(m) else {}
+    mats = [m.iteration_matrix(q, V, t, *c, **kw) for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    if big:
+        from scipy import sparse
+        M, Ct, Kt = (sparse.csr_matrix(x) for x in mats)
+    else:
+        M, Ct, Kt = (x.toarray() if hasattr(x, "toarray") else np.asarray(x, float) for x in mats)
     Vd = prob.model_acceleration(f0[nX:], W, quats)
-    Zx, Vx, Ex = np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((nv, nv))
-    Vw, Pr, Ew = np.eye(nv), np.eye(nv), np.zeros((nv, nv))
-    if len(kin.vector_v):
-        Zx[kin.vector_v, kin.vector_v] = 1.0
+    parts = {k: [] for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew")}
+    vec = np.asarray(kin.vector_v, int)
+    one = (vec, vec, np.ones(len(vec)))
+    parts["Zx"].append(one)
     Rs = iter(kin.rotations(quats))
+    se3_rows = np.zeros(nv, bool)
+
+    def add(name, v, B):
+        nb, k = v.shape
+        parts[name].append((np.broadcast_to(v[:, :, None], (nb, k, k)).ravel(),
+                            np.broadcast_to(v[:, None, :], (nb, k, k)).ravel(), B.ravel()))
     for s, dpsi in zip(prob.sets, kin.dpsi):
         v = s.vidx
         nb, k = v.shape
         D0 = dpsi(np.zeros((nb, k)))                             # ξ = dψ_0 δX
-        ix = (v[:, :, None], v[:, None, :])
         if not s.se3:
-            Zx[ix] = D0
+            add("Zx", v, D0)
             continue
+        se3_rows[v.ravel()] = True
         R = next(Rs)
         w, u = W[s.wang], W[s.wlin]
         blk = np.zeros((nb, 6, 6))
         blk[:, :3, :3] = np.eye(3)
         blk[:, 3:, 3:] = R
-        Zx[ix] = blk @ D0
-        Vw[ix] = blk
-        Pr[ix] = np.transpose(blk, (0, 2, 1))
+        add("Zx", v, blk @ D0)
+        add("Vw", v, blk)
+        add("Pr", v, np.transpose(blk, (0, 2, 1)))
         blk = np.zeros((nb, 6, 6))
         blk[:, 3:, :3] = -R @ hat(u)
-        Vx[ix] = blk @ D0
+        add("Vx", v, blk @ D0)
         blk = np.zeros((nb, 6, 6))
         blk[:, 3:, :3] = hat(np.einsum("bji,bj->bi", R, Vd[s.wlin]))
-        Ex[ix] = blk @ D0
+        add("Ex", v, blk @ D0)
         blk = np.zeros((nb, 6, 6))
         blk[:, 3:, :3] = hat(u)
         blk[:, 3:, 3:] = -hat(w)
-        Ew[ix] = blk
-    MiK, MiC = np.split(np.linalg.solve(M, np.hstack([Kt, Ct])), 2, axis=1)
+        add("Ew", v, blk)
+    plain = np.flatnonzero(~se3_rows)                              # V = W, Ẇ = V̇ there
+    for name in ("Vw", "Pr"):
+        parts[name].append((plain, plain, np.ones(len(plain))))
+    shape = (nv, nv)
+    mk = (lambda p: _sparse_csr(shape, p)) if big else (lambda p: _dense(shape, p))
+    Zx, Vx, Ex, Vw, Pr, Ew = (mk(parts[k]) for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew"))
+    if big:
+        from scipy import sparse
+        from scipy.sparse.linalg import splu
+        lu = splu(sparse.csc_matrix(M))
+        MiK, MiC = (sparse.csr_matrix(lu.solve(x.toarray())) for x in (Kt, Ct))
+    else:
+        MiK, MiC = np.split(np.linalg.solve(M, np.hstack([Kt, Ct])), 2, axis=1)
     tl = np.rint(prob.to_local(np.arange(nv, dtype=float))).astype(int)
-    J = np.zeros((nX + nv, nX + nv))
-    J[nX:, :nX] = (Ex - Pr @ (MiK @ Zx + MiC @ Vx))[:, tl]
-    J[nX:, nX:] = Ew - Pr @ (MiC @ Vw)
-    J[np.arange(nX), nX + tl] = prob.chart_scale
+    JWX = Ex - Pr @ (MiK @ Zx + MiC @ Vx)
+    JWW = Ew - Pr @ (MiC @ Vw)
     d = math.sqrt(_EPS)
     X = np.zeros(nX)
+    JXX = np.empty((nX, nX))
     for j in range(nX):
         X[j] = d
-        J[:nX, j] = (prob.kinematics(X, W) - f0[:nX]) / d
+        JXX[:, j] = (prob.kinematics(X, W) - f0[:nX]) / d
         X[j] = 0.0
+    if big:
+        from scipy import sparse
+        JXW = sparse.csr_matrix((prob.chart_scale, (np.arange(nX), tl)), shape=(nX, nv))
+        return sparse.bmat([[sparse.csr_matrix(JXX), JXW], [sparse.csr_matrix(JWX)[:, tl], JWW]], format="csc")
+    J = np.zeros((nX + nv, nX + nv))
+    J[:nX, :nX] = JXX
+    J[np.arange(nX), nX + tl] = prob.chart_scale
+    J[nX:, :nX] = JWX[:, tl]
+    J[nX:, nX:] = JWW
     return J
+
+
+def _dense(shape, parts):
+    out = np.zeros(shape)
+    for r, c, v in parts:
+        np.add.at(out, (r, c), v)
+    return out
+
+
+def _sparse_csr(shape, parts):
+    from scipy import sparse
+    parts = [p for p in parts if len(p[0])]
+    if not parts:
+        return sparse.csr_matrix(shape)
+    r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    return sparse.csr_matrix((v, (r, c)), shape=shape)
+
+
+def _accepts_sparse(m):
+    import inspect
+    try:
+        return "sparse" in inspect.signature(m.iteration_matrix).parameters
+    except (TypeError, ValueError):
+        return False
 
 
 class _Solver:
