@@ -135,6 +135,14 @@ class GenAlpha(Stepper):
         c = self._consts
         if c is None or c.h != h:
             k, g, b = self._k, self.gamma, self.beta
+            if self.prob.compiled:                  # one kernel call instead of ~10 numpy operations
+                from ..kernels.stage import ga_affine
+                n, nX = len(self.W), len(self._to_local)
+                a0, Wa, dXa, sp = np.empty(n), np.empty(n), np.empty(nX), np.empty(nX)
+                ga_affine(self.W, self.Wd, self.a, self.af, self.am, h, g, b, k, self.prob.chart_scale,
+                          self._to_local, a0, Wa, dXa, sp)
+                c = self._consts = _Affine(h, a0, Wa, dXa, k, h * g * k, sp)
+                return c
             a0 = (self.af * self.Wd - self.am * self.a) / (1 - self.am)
             d0 = h * self.W + h * h * (0.5 - b) * self.a + h * h * b * a0
             scale = self.prob.chart_scale
@@ -333,20 +341,21 @@ class GenAlpha(Stepper):
         if self._solve is None or not _same(self._lu_h, h):
             self._jacobian(Wd1, lam, t1, h)
         prev, converged, finite = None, False, True
-        tol = self.tol * (1.0 + np.linalg.norm(self.W))
+        tol = self.tol * (1.0 + math.sqrt(self.W.dot(self.W)))
         for it in range(self.nmax):
             r = self._residual(Wd1, lam, t1, h)
             if not self._finite:
                 finite = False
                 break
-            dz = -self._solve(r)
-            dW = dz[:n]
-            Wd1 = Wd1 + dW
-            lam = lam + dz[n:]
+            dz = self._solve(r)
+            dW = dz[:n] if self.nc else dz
+            Wd1 = Wd1 - dW
+            if self.nc:
+                lam = lam - dz[n:]
             self.n_newton += 1
             # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
             # of size eps/(h²β) from the scaled constraint rows
-            size = h * np.sqrt(dW @ dW)
+            size = h * math.sqrt(dW.dot(dW))
             if size <= tol:
                 converged = True
                 break

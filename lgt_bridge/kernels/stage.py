@@ -284,6 +284,20 @@ def ga_state(Wd, sv, sp, Wa, dXa, tl, w, bt, vt, off):
 
 
 @njit(cache=True, error_model="numpy")
+def ga_affine(W, Wd, a, af, am, h, g, b, k, scale, tl, a0, Wa, dXa, sp):
+    """Generalized-α's step constants (genalpha.GenAlpha._affine): a0 = (α_f Ẇ - α_m a)/(1 - α_m),
+    Wa = W + h(1 - γ) a + hγ a0, dXa = scale · (hW + h²(½ - β) a + h²β a0)[tl], sp = h²βk scale."""
+    for j in range(W.shape[0]):
+        a0[j] = (af * Wd[j] - am * a[j]) / (1.0 - am)
+        Wa[j] = W[j] + h * (1.0 - g) * a[j] + h * g * a0[j]
+    hh = h * h
+    for j in range(dXa.shape[0]):
+        i = tl[j]
+        dXa[j] = scale[j] * (h * W[i] + hh * (0.5 - b) * a[i] + hh * b * a0[i])
+        sp[j] = hh * b * k * scale[j]
+
+
+@njit(cache=True, error_model="numpy")
 def ga_residual(Vd, Wd, r, w, bt, off):
     """r = Ẇ - Ẇ(V̇) at the state of the work array (generalized-α's unconstrained rows);
     the sum of r² (inf or NaN when r is not finite)."""
