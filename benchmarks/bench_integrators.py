@@ -54,13 +54,13 @@ from lgt_bridge.integrators import METHODS as _AVAILABLE
 PRESETS = {
     "full": dict(Ns=[1, 10, 100, 1000, 10_000], target_wall=0.4, min_steps=20, wp_T=0.5,
                  wp_tols=[10.0 ** -k for k in range(4, 13)], ref_tol=1e-13, repeats=7, eval_budget=0.03,
-                 run_repeats=2, wp_budget=1.0),
+                 run_repeats=2, wp_budget=1.0, ga_N=100, ga_steps=200),
     "quick": dict(Ns=[1, 10, 100], target_wall=0.05, min_steps=10, wp_T=0.1,
                   wp_tols=[1e-4, 1e-6, 1e-8, 1e-9], ref_tol=1e-11, repeats=3, eval_budget=0.01,
-                  run_repeats=1, wp_budget=0.3),
+                  run_repeats=1, wp_budget=0.3, ga_N=100, ga_steps=50),
     "tiny": dict(Ns=[1, 10], target_wall=0.01, min_steps=5, wp_T=0.02,
                  wp_tols=[1e-4, 1e-6], ref_tol=1e-9, repeats=2, eval_budget=0.002,
-                 run_repeats=1, wp_budget=0.0),
+                 run_repeats=1, wp_budget=0.0, ga_N=4, ga_steps=5),
 }
 TARGETS = dict(glue_N1=2.0, glue_N100=0.5, k_lo=0.9, k_hi=1.1, mem_slope=1.1)
 WP_ERRORS = (1e-6, 1e-8)
@@ -359,7 +359,53 @@ def work_precision(a, notes):
 
 
 # --------------------------------------------------------------------------- verdicts and report
-def fits_and_verdicts(rows, exu_rows, Ns):
+# --------------------------------------------------------------------------- section 5: genalpha
+GA_TARGET = 10.0
+
+
+def genalpha_cost(models, N, steps, dt, repeats):
+    """Generalized-α on N free bodies on SE(3)/exp: µs per step (stats wall_s / steps, the
+    least of ``repeats`` runs of ``steps`` steps) against one f of the same model at its
+    start (best of a loop), for each (label, make_model)."""
+    out = []
+    for label, make in models:
+        model = make(N)
+        simulate(model, (0.0, 5 * dt), method="genalpha", group="SE3", chart="exp", dt=dt)      # warm up
+        best = None
+        for _ in range(repeats):
+            r = simulate(model, (0.0, steps * dt), method="genalpha", group="SE3", chart="exp", dt=dt,
+                         t_eval=[steps * dt])
+            us = 1e6 * r.stats["wall_s"] / r.stats["n_steps"]
+            if best is None or us < best[0]:
+                best = (us, r.stats)
+        q, V = np.array(model.q0, float), np.array(model.V0, float)
+        n = max(200, int(0.02 / max(1e-7, _once(model, q, V))))
+        f_us = np.inf
+        for _ in range(7):
+            t0 = time.perf_counter()
+            for _ in range(n):
+                model.f(q, V, 0.0)
+            f_us = min(f_us, 1e6 * (time.perf_counter() - t0) / n)
+        st = best[1]
+        out.append(dict(model=label, N=N, dt=dt, steps=st["n_steps"], us_per_step=best[0], f_us=f_us,
+                        ratio=best[0] / f_us, newton_per_step=st["n_newton"] / st["n_steps"],
+                        f_per_step=st["n_f"] / st["n_steps"], jacobians=st.get("n_jacobians")))
+    return out
+
+
+def _once(model, q, V):
+    t0 = time.perf_counter()
+    model.f(q, V, 0.0)
+    return time.perf_counter() - t0
+
+
+def _exudyn_free_bodies(N):
+    from lgt_exudyn import ExudynModel
+    from lgt_exudyn import scenes as es
+    return ExudynModel(es.free_bodies(N)[1])
+
+
+def fits_and_verdicts(rows, exu_rows, Ns, ga_rows=()):
     exu = {r["N"]: r["us_per_eval"] for r in exu_rows}
     for r in rows:
         e = exu.get(r["N"])
@@ -399,6 +445,9 @@ def fits_and_verdicts(rows, exu_rows, Ns):
     ]
     if max(Ns) < 100:
         verdicts[1].update(ok=None, detail="no N ≥ 100 in this run")
+    for g in ga_rows:
+        verdicts.append(verdict(f"genalpha, {g['N']} free bodies on SE(3), {g['model']}: time per step ≤ "
+                                f"{GA_TARGET:g}× one f", [(g["model"], g["ratio"])], GA_TARGET, "le"))
     return fits, verdicts
 
 
@@ -484,6 +533,16 @@ def write_report(out, data):
         for s in ex.get("capped", []):
             L.append(f"\nN = {s['N']} left out: estimated build {s['estimated_build_s']:.0f} s > cap "
                      f"{st['exudyn_max_build_s']:g} s.")
+    ga = data.get("genalpha") or []
+    if ga:
+        L += ["", f"## 5. Generalized-α on {ga[0]['N']} free bodies on SE(3)/exp", "",
+              f"Time per step (stats wall_s / steps, least of the repeated runs of {ga[0]['steps']} steps at "
+              f"dt = {ga[0]['dt']:g}) against one f of the same model (best of a loop); target ≤ {GA_TARGET:g}×.",
+              "", "| model | µs per step | f µs | ratio | Newton iterations / step | f / step | Jacobians |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
+        for g in ga:
+            L.append(f"| {g['model']} | {g['us_per_step']:.1f} | {g['f_us']:.2f} | {g['ratio']:.1f} | "
+                     f"{g['newton_per_step']:.2f} | {g['f_per_step']:.2f} | {g['jacobians']} |")
     wp = data["work_precision"]
     L += ["", "## 4. Heavy top work-precision", ""]
     if not wp or wp.get("skipped"):
@@ -562,6 +621,7 @@ def main(argv=None):
                     "--wp-budget s in total; least wall kept")
     ap.add_argument("--wp-budget", type=float, default=None)
     ap.add_argument("--no-wp", action="store_true")
+    ap.add_argument("--no-ga", action="store_true", help="skip section 5 (genalpha on free bodies)")
     a = ap.parse_args(argv)
     preset = "tiny" if a.tiny else "quick" if a.quick else "full"
     P = PRESETS[preset]
@@ -609,7 +669,16 @@ def main(argv=None):
                       f"  glue {r.get('glue_us_per_eval', nan):9.1f} µs/eval"
                       + (f"  glue/Exudyn {r.get('glue_us_per_eval', nan) / e:6.2f}" if e else "")
                       + f"  peak {r['peak_bytes'] / 1e6:8.2f} MB", flush=True)
-        fits, verdicts = fits_and_verdicts(rows, exu_rows, a.Ns)
+        ga_rows = []
+        if not a.no_ga:
+            models = [("engine-free scene (compiled f)", lambda n: scenes.free_bodies(n))]
+            if have_exu:
+                models.append(("Exudyn RotVecLG bodies (ExudynModel)", _exudyn_free_bodies))
+            ga_rows = genalpha_cost(models, P["ga_N"], P["ga_steps"], a.dt, P["run_repeats"] + 1)
+            for g in ga_rows:
+                print(f"genalpha N={g['N']} {g['model']}: {g['us_per_step']:.1f} µs/step, f {g['f_us']:.2f} µs, "
+                      f"ratio {g['ratio']:.1f}", flush=True)
+        fits, verdicts = fits_and_verdicts(rows, exu_rows, a.Ns, ga_rows)
         wp = dict(skipped="--no-wp") if a.no_wp else work_precision(a, notes)
     finally:
         if env_before is None:
@@ -624,6 +693,7 @@ def main(argv=None):
     exu = (dict(rows=exu_rows, capped=capped) if have_exu
            else dict(skipped=notes[[n.startswith("Exudyn floor skipped") for n in notes].index(True)]))
     data = dict(meta=meta, settings=settings, notes=notes, glue=rows, fits=fits, exudyn=exu, verdicts=verdicts,
+                genalpha=ga_rows,
                 work_precision=wp, total_wall_s=time.perf_counter() - t_start)
     out = Path(a.out)
     write_report(out, data)

@@ -12,6 +12,7 @@ are evaluated. tests/test_series.py checks every function against mpmath.
     c3(phi) = (1 - sinc phi) / phi**2          = (phi - sin phi) / phi**3
     d(phi)  = (1 - gamma) / phi**2,            gamma = (phi/2) cot(phi/2)
     e(phi)  = (1/beta + gamma - 2) / phi**4,   beta  = sinc(phi/2)**2
+    hcos(phi) = (1 - cos(phi/2)) / phi**2      (the exp chart's quaternion: p0 - 1 = -phi² hcos)
 """
 from math import factorial
 
@@ -25,6 +26,8 @@ _C3 = np.array([(-1) ** k / factorial(2 * k + 3) for k in range(14)])
 # sinc: (-1)^k / (2k+1)!;  beta = sinc(phi/2)^2 = 2 (1 - cos phi)/phi^2: 2 (-1)^k / (2k+2)!
 _SINC = np.array([(-1) ** k / factorial(2 * k + 1) for k in range(14)])
 _BETA = np.array([2.0 * (-1) ** k / factorial(2 * k + 2) for k in range(14)])
+# hcos: (-1)^k / (4^(k+1) (2k+2)!)
+_HCOS = np.array([(-1) ** k / (4.0 ** (k + 1) * factorial(2 * k + 2)) for k in range(14)])
 # d: |B_{2k+2}| / (2k+2)!  (Bernoulli numbers; from (x/2) cot(x/2) = 1 - sum |B_2n| x^2n/(2n)!)
 _D = np.array([
     0.08333333333333333, 0.001388888888888889, 3.306878306878307e-05, 8.267195767195768e-07,
@@ -89,8 +92,8 @@ def _blend(phi, coef, lim, closed):
     return out
 
 
-_L_C3, _L_D, _L_E, _L_SINC, _L_BETA = map(_limits, (_C3, _D, _E, _SINC, _BETA))
-_C3, _D, _E, _SINC, _BETA = (c.tolist() for c in (_C3, _D, _E, _SINC, _BETA))
+_L_C3, _L_D, _L_E, _L_SINC, _L_BETA, _L_HCOS = map(_limits, (_C3, _D, _E, _SINC, _BETA, _HCOS))
+_C3, _D, _E, _SINC, _BETA, _HCOS = (c.tolist() for c in (_C3, _D, _E, _SINC, _BETA, _HCOS))
 
 
 def sinc(phi):
@@ -123,3 +126,8 @@ def e(phi):
         s, c = np.sin(h), np.cos(h)
         return ((h / s) ** 2 + h * c / s - 2.0) / p ** 4
     return _blend(phi, _E, _L_E, closed)
+
+
+def hcos(phi):
+    """(1 - cos(phi/2)) / phi**2 = 2 sin²(phi/4) / phi**2."""
+    return _blend(phi, _HCOS, _L_HCOS, lambda p: 2.0 * (np.sin(0.25 * p) / p) ** 2)

@@ -43,7 +43,14 @@ def test_bench_integrators_tiny_writes_json_and_markdown(bench_integrators, tmp_
     assert len(data["fits"]) == len(groups) * len(methods)
     for f in data["fits"]:
         assert f["k_time_per_step"] is not None and f["memory_slope"] is not None
-    assert [v["target"][:6] for v in data["verdicts"]] == ["glue ≤", "glue ≤", "time p", "memory"]
+    assert [v["target"][:6] for v in data["verdicts"][:4]] == ["glue ≤", "glue ≤", "time p", "memory"]
+    # section 5: generalized-α on free bodies, the engine-free scene (and Exudyn's twin if installed)
+    ga = data["genalpha"]
+    assert [v["target"][:8] for v in data["verdicts"][4:]] == ["genalpha"] * len(ga)
+    assert len(ga) == 1 + (importlib.util.find_spec("exudyn") is not None)
+    for g in ga:
+        assert g["steps"] >= 1 and _positive(g["us_per_step"]) and _positive(g["f_us"])
+        assert g["ratio"] == g["us_per_step"] / g["f_us"] and g["f_per_step"] >= 1
 
     if importlib.util.find_spec("exudyn") is not None:
         rows = data["exudyn"]["rows"]

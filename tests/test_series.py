@@ -22,18 +22,31 @@ def _ref(name, phi):
         return mp.sin(p) / p
     if name == "beta":
         return (mp.sin(h) / h) ** 2
+    if name == "hcos":
+        return (1 - mp.cos(h)) / p ** 2
 
 
 PHIS = [10.0 ** -k for k in range(3, 13)] + [0.05, 0.7, 1.3, 1.99, 2.0, 2.01, 3.0, np.pi, 4.5, 6.0]
 
 
-@pytest.mark.parametrize("name", ["c3", "d", "e", "sinc", "beta"])
+@pytest.mark.parametrize("name", ["c3", "d", "e", "sinc", "beta", "hcos"])
 def test_coefficient_against_mpmath(name):
     phi = np.array(PHIS)
     got = getattr(_series, name)(phi)
     for g, p in zip(got, PHIS):
         ref = _ref(name, p)
         assert abs(g - float(ref)) <= 1e-14 * abs(float(ref)), (name, p, g, ref)
+
+
+def test_kernel_hcos_equals_the_series_function():
+    """The compiled helper behind the exp chart's quaternion (p0 - 1 = -φ² hcos φ) against
+    _series.hcos (itself against mpmath above), on both sides of SERIES_MAX."""
+    from lgt_bridge.kernels import rotations as kr
+    phi = np.array(PHIS + [0.0])
+    ref = _series.hcos(phi)
+    got = np.array([kr.hcos(p) for p in phi])
+    np.testing.assert_allclose(got, ref, rtol=2e-16, atol=0)
+    assert kr.hcos(0.0) == 1 / 8
 
 
 def test_coefficients_at_zero_are_the_limits():

@@ -82,9 +82,11 @@ class Stepper:
                        " although every stage derivative was finite", until=True, hint=self.DIVERGED_HINT),
                     diverged=True)
 
-    def finish(self, t1, q1, V1, W1=None, quats=None):
-        """Accept (q1, V1) at t1, after projection onto the constraints if the model has them."""
-        self.check_finite(t1, q1, V1)
+    def finish(self, t1, q1, V1, W1=None, quats=None, checked=False):
+        """Accept (q1, V1) at t1, after projection onto the constraints if the model has them
+        (``checked``: the caller has already checked them finite)."""
+        if not checked:
+            self.check_finite(t1, q1, V1)
         if self.projector is not None:
             q1, V1 = self.projector(q1, V1, t1)
             W1 = quats = None

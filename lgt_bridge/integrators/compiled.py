@@ -119,7 +119,7 @@ class CompiledProblem(LocalProblem):
         if self._tl is None:
             self._tl = np.rint(self.to_local(np.arange(self.nv, dtype=float))).astype(np.int64)
             self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)
-        _k.ga_state(self._zv, 0.0, self._zx, W, X, self._tl, self.work, self.bt, self.vt, self.off)
+        _k.ga_state(self._zv, 0.0, self._zx, W, X, self._tl, self.work, self.bt, self.vt, self.off, True)
         Vd = self.model.f(self._q, self._V, t)
         self.n_f += 1
         if type(Vd) is not np.ndarray or Vd.dtype is not _F64:
@@ -133,7 +133,7 @@ class CompiledProblem(LocalProblem):
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):
         """(q, V, quats, W) at W = Wa + sv Ẇ, X = dXa + sp Ẇ[to_local]: one kernel call;
         views of the work array, valid until the next evaluation."""
-        _k.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off)
+        _k.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off, False)
         return self._q, self._V, self._p, self._W
 
     def ga_residual(self, Vd, Wd, r, W, quats):

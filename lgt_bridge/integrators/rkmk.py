@@ -101,7 +101,7 @@ class FixedRK(ExplicitRK):
         # every stage was checked finite; q1, V1 (built from X1, W1) are checked before the growth
         self.check_finite(t + h, q1, V1)
         self._check_growth(t, h, W1)
-        self.finish(t + h, q1, V1, W1, quats)
+        self.finish(t + h, q1, V1, W1, quats, checked=True)
         return True, None      # fixed step: the driver goes back to dt after a shortened landing step
 
 

@@ -26,6 +26,8 @@ _L_SINC = np.array(_series._L_SINC)
 _L_C3 = np.array(_series._L_C3)
 _L_D = np.array(_series._L_D)
 _L_E = np.array(_series._L_E)
+_HCOS = np.array(_series._HCOS)
+_L_HCOS = np.array(_series._L_HCOS)
 SERIES_MAX = _series.SERIES_MAX
 TWO_PI = 2.0 * math.pi
 GIMBAL_TOL = 1e-9
@@ -74,6 +76,14 @@ def eser(phi):
 
 
 @njit(cache=True, error_model="numpy")
+def hcos(phi):
+    if phi >= SERIES_MAX:
+        s = math.sin(0.25 * phi) / phi
+        return 2.0 * s * s
+    return _horner(_HCOS, _L_HCOS, phi * phi)
+
+
+@njit(cache=True, error_model="numpy")
 def cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
@@ -98,10 +108,10 @@ def rotate(p0, p1, p2, p3, v0, v1, v2):
 @njit(cache=True, error_model="numpy")
 def rotvec_minus_one(x0, x1, x2):
     """exp chart quaternion - 1 without cancellation; also returns φ and sinc(φ/2)."""
-    phi = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    phi2 = x0 * x0 + x1 * x1 + x2 * x2
+    phi = math.sqrt(phi2)
     sh = sinc(0.5 * phi)
-    s = math.sin(0.25 * phi)
-    return -2.0 * s * s, 0.5 * sh * x0, 0.5 * sh * x1, 0.5 * sh * x2, phi, sh
+    return -phi2 * hcos(phi), 0.5 * sh * x0, 0.5 * sh * x1, 0.5 * sh * x2, phi, sh
 
 
 @njit(cache=True, error_model="numpy")

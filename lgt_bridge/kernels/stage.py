@@ -105,13 +105,13 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
         X[j] *= h
     for j in range(nv):
         W[j] = W0[j] + h * W[j]
-    return tau_state(ns == 0, X, W, bt, vt, qk, pk, q, V, Xd, p)
+    return tau_state(ns == 0, X, W, bt, vt, qk, pk, q, V, Xd, p, True)
 
 
 @njit(cache=True, error_model="numpy")
-def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p):
-    """τ, model velocity and local kinematics of every body at (X, W) (``start``: X = 0,
-    q = q_k); returns the largest |c| of the Cayley-chart bodies."""
+def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
+    """τ, model velocity and (``kin``) local kinematics Ẋ of every body at (X, W) (``start``:
+    X = 0, q = q_k); returns the largest |c| of the Cayley-chart bodies."""
     cmax = 0.0
     for b in range(bt.shape[0]):
         se3, cay, ro, xo = bt[b, SE3] == 1, bt[b, CAY] == 1, bt[b, ROT_ONLY] == 1, bt[b, XOFF]
@@ -160,6 +160,14 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p):
         tw = TWIST
         w0, w1, w2 = W[bt[b, tw]], W[bt[b, tw + 1]], W[bt[b, tw + 2]]
         V[bt[b, tw]], V[bt[b, tw + 1]], V[bt[b, tw + 2]] = w0, w1, w2
+        if not kin:                             # the velocities only (generalized-α)
+            if not ro:
+                j0, j1, j2 = bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
+                if se3:
+                    V[j0], V[j1], V[j2] = rotate(p0, p1, p2, p3, W[j0], W[j1], W[j2])
+                else:
+                    V[j0], V[j1], V[j2] = W[j0], W[j1], W[j2]
+            continue
         xw0, xw1, xw2 = cross(x0, x1, x2, w0, w1, w2)
         if cay:
             cw = x0 * w0 + x1 * w1 + x2 * w2
@@ -271,16 +279,17 @@ def stage(Vd, KX, KW, a, i, h, w, bt, vt, off):
 
 
 @njit(cache=True, error_model="numpy")
-def ga_state(Wd, sv, sp, Wa, dXa, tl, w, bt, vt, off):
+def ga_state(Wd, sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
     """Generalized-α's state for the unknowns Ẇ (affine in them): W = Wa + sv Ẇ,
     X = dXa + sp Ẇ[tl] (sp per entry of X: the chart scale; tl: X's entries in V's layout),
-    then τ, the model velocity and Ẋ of every body into the work array, as stage_state."""
+    then τ, the model velocity and (``kin``: radau5's rates) Ẋ of every body into the work
+    array, as stage_state."""
     X, W, q, V, W0, qk, pk, p = views(w, off)
     for j in range(W.shape[0]):
         W[j] = Wa[j] + sv * Wd[j]
     for j in range(X.shape[0]):
         X[j] = dXa[j] + sp[j] * Wd[tl[j]]
-    tau_state(False, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p)
+    tau_state(False, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p, kin)
 
 
 @njit(cache=True, error_model="numpy")
