@@ -22,6 +22,7 @@ RUNS = [
     ("dop853", "SE3", "exp", dict(rtol=1e-9, atol=1e-9)),
     ("dop853", "SO3xR3", "exp", dict(rtol=1e-9, atol=1e-9)),
     ("scipy:DOP853", "SE3", "exp", dict(rtol=1e-9, atol=1e-9)),
+    ("radau5", "SO3xR3", "exp", dict(rtol=1e-6, atol=1e-6)),
     ("genalpha", "SE3", "exp", dict(dt=1e-4)),
     ("genalpha", "SO3xR3", "exp", dict(dt=1e-4)),
 ]

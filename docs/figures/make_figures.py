@@ -30,7 +30,7 @@ FIGURES = {
                       groups=["SE3", "SO3xR3"], charts=["exp", "cay"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
     "exudyn_heavy_top": dict(spec="exudyn_heavy_top", methods=["rkmk4", "dopri5", "dop853", "genalpha"],
                              groups=["SE3", "SO3xR3"], charts=["exp"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
-    "solo12_pd": dict(spec="pinocchio_robot:solo12", scenario="pd", methods=["rkmk4", "dop853", "genalpha"],
+    "solo12_pd": dict(spec="pinocchio_robot:solo12", scenario="pd", methods=["rkmk4", "dop853", "radau5", "genalpha"],
                       groups=["SE3", "SO3xR3"], charts=["exp"], tols=TOLS, dts=[1e-3, 5e-4, 2.5e-4]),
 }
 
