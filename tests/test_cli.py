@@ -11,7 +11,7 @@ from lgt_bridge.simulate import simulate
 def test_demo_table_lists_every_run_with_small_errors(capsys):
     assert cli.main(["demo", "--T", "0.004"]) == 0
     out = capsys.readouterr().out
-    rows = [ln for ln in out.splitlines() if re.match(r"^(euler|rkmk|dopri5|dop853|scipy|genalpha)", ln)]
+    rows = [ln for ln in out.splitlines() if re.match(r"^(euler|rkmk|dopri5|dop853|scipy|radau5|genalpha)", ln)]
     assert len(rows) == len(demo.RUNS)
     errs = np.array([float(ln.split()[4]) for ln in rows])
     assert np.all(errs < 1e-2) and "FAILED" not in out
