@@ -267,6 +267,7 @@ class Driver:
     def __init__(self, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None,
                  consistent=True):
         self.model, self.stepper = model, stepper
+        self._post = getattr(model, "post_step", None)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
         self.t_end = t_end
         self.dense = bool(getattr(stepper, "dense_capable", False)) and t_end is not None
@@ -292,7 +293,7 @@ class Driver:
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
-        post = getattr(self.model, "post_step", None)
+        post = self._post
         try:
             if post is None:
                 accepted, h_new = st.attempt(self.t, h_try)

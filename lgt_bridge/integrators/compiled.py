@@ -144,13 +144,13 @@ class CompiledProblem(LocalProblem):
 
     # --- the stage API ------------------------------------------------------------
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
-        self._w0(W0)
-        if i == 0:
-            self._vd = _NONE
-        c = _k.stage(self._vd, KX, KW, a, i, h, self.work, self.bt, self.vt, self.off)
+        if W0 is not self._W0_src:                 # (_w0, inlined: this runs once per stage)
+            self._W0[:] = W0
+            self._W0_src = W0
+        c = _k.stage(_NONE if i == 0 else self._vd, KX, KW, a, i, h, self.work, self.bt, self.vt, self.off)
         if c < 0.0:
             self._failed(KX, KW)
-        self._vd = _NONE
+        self._vd = _NONE                          # consumed (a failing f leaves nothing pending)
         if c > climit:
             return c
         Vd = self.model.f(self._q, self._V, ts)

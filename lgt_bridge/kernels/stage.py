@@ -44,7 +44,7 @@ def work_layout(nX, nv, nq, nb):
     return off, int(sum(sizes))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def views(w, off):
     """X, W, q, V, W0, q_k, p_k (nb, 4), p (nb, 4) as views of the work array (the
     scratch Ẋ is ``w[off[OXD]:]``)."""
@@ -83,7 +83,7 @@ def bases(bt, q, pk):
         pk[b, 0], pk[b, 1], pk[b, 2], pk[b, 3] = p0, p1, p2, p3
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     """Stage combination, τ, model velocity and local kinematics of every body.
     ``ns = 0``: the step's start (X = 0, q = q_k). Returns the largest |c| of the
@@ -108,7 +108,7 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     return tau_state(ns == 0, X, W, bt, vt, qk, pk, q, V, Xd, p, True)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
     """τ, model velocity and (``kin``) local kinematics Ẋ of every body at (X, W) (``start``:
     X = 0, q = q_k); returns the largest |c| of the Cayley-chart bodies."""
@@ -219,7 +219,7 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
     return cmax
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def convert(mode, src, W, p, bt, out):
     """Velocity representations of SE(3) bodies (other entries copied):
     mode 0: W -> V (u -> R u);  1: V -> W (ṙ -> Rᵀ ṙ);
@@ -247,7 +247,7 @@ def convert(mode, src, W, p, bt, out):
             out[j0], out[j1], out[j2] = rotate(p0, p1, p2, p3, s0 + c0, s1 + c1, s2 + c2)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def stage_derivative(Vd, W, p, bt, KW, KX, i):
     """KW[i] = Ẇ from the model's V̇; True when KX[i] and KW[i] are finite."""
     row = KW[i]
