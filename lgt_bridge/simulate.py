@@ -155,10 +155,15 @@ def mass_defects(M, A=None, rtol=None):
         U = Z @ U
         return [(int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol)]
     out = []
+    by_size = {}
     for idx in _diagonal_blocks(S):
-        w, U = np.linalg.eigh(S[np.ix_(idx, idx)])
-        out += [(int(idx[np.argmax(np.abs(U[:, k]))]), float(w[k])) for k in np.flatnonzero(w <= rtol)]
-    return out
+        by_size.setdefault(len(idx), []).append(idx)
+    for group in by_size.values():                 # same-size blocks in one batched eigh
+        I = np.array(group)
+        w, U = np.linalg.eigh(S[I[:, :, None], I[:, None, :]])
+        for b, k in zip(*np.nonzero(w <= rtol)):
+            out.append((int(I[b][np.argmax(np.abs(U[b][:, k]))]), float(w[b, k])))
+    return sorted(out)
 
 
 def _diagonal_blocks(S):
