@@ -85,7 +85,7 @@ def _jacobians(model, group, chart, t=0.1):
     st.set_state(model.q0, model.V0)
     f0 = st._start_rates(t)
     st._fd_jacobian(t, f0)
-    return rd.model_jacobian(prob, st._kin, st.q, st.V, st.W, f0, t), st.J
+    return rd.model_jacobian(prob, st._kin, st.q, st.V, st.W, f0, t, st._sparse_kw), st.J
 
 
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3"])

@@ -63,7 +63,8 @@ _TI_C = TI[1] + 1j * TI[2]
 
 
 def _rms(x):
-    return math.sqrt(float(np.mean(x * x))) if x.size else 0.0
+    v = x.ravel()
+    return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
 
 
 class Radau5(Stepper):
@@ -99,6 +100,7 @@ class Radau5(Stepper):
         self._analytic = (not m.n_constraints and m.has_mass_matrix
                           and callable(getattr(m, "iteration_matrix", None)))
         self._kin = None
+        self._sparse_kw = self._analytic and _accepts_sparse(m)
         if self._analytic:
             from .genalpha_matrix import Kinematics
             self._kin = Kinematics(problem)
@@ -146,7 +148,7 @@ class Radau5(Stepper):
         """J = ∂F/∂y at (0, W_k): from the model's own derivatives when it has them
         (:func:`model_jacobian`), else forward differences of F (nX + nv evaluations of f)."""
         if self._analytic:
-            J = model_jacobian(self.prob, self._kin, self.q, self.V, self.W, f0, t)
+            J = model_jacobian(self.prob, self._kin, self.q, self.V, self.W, f0, t, self._sparse_kw)
             if np.isfinite(J.data if hasattr(J, "tocsc") else J).all():
                 self.J = J
                 self._jac_current = True
@@ -190,7 +192,9 @@ class Radau5(Stepper):
         from scipy.linalg import lapack
         solvers = []
         for mu, getrf, getrs in ((GAMMA, lapack.dgetrf, lapack.dgetrs), (MU, lapack.zgetrf, lapack.zgetrs)):
-            lu, piv, info = getrf(mu / h * np.eye(n) - self.J, overwrite_a=True)
+            A = -self.J if mu is GAMMA else -self.J.astype(complex)
+            A.flat[::n + 1] += mu / h
+            lu, piv, info = getrf(A, overwrite_a=True)
             if info != 0 or not np.isfinite(lu).all():
                 raise StepFailed(f"radau5: the Newton matrix is singular or not finite at h = {h:.3g} "
                                  "(the model's Jacobian); reduce the first step or check the model's f.")
@@ -327,7 +331,7 @@ class Radau5(Stepper):
         return True, h * fac
 
 
-def model_jacobian(prob, kin, q, V, W, f0, t):
+def model_jacobian(prob, kin, q, V, W, f0, t, sparse_kw=False):
     """∂F/∂y at y = (0, W) of the local ODE (step start: q = q_k, V, W its velocities, f0 =
     F there), from the model's M, C_t = -∂Q/∂V and K_t = ∂(M V̇ - Q)/∂z
     (``iteration_matrix``; z = (δθ body, δr inertial) increments of SO(3)xR³), for an
@@ -335,15 +339,17 @@ def model_jacobian(prob, kin, q, V, W, f0, t):
     it by ξ = dψ_0 δX (body frame). SO(3)xR³ and rotation-only bodies, vector and circle
     coordinates: z = ξ, V = W, Ẇ = V̇. SE(3) bodies (W = (ω, u = Rᵀṙ)): z = (ξ_ω, R ξ_v),
     V = (ω, R u) with ∂(R u)/∂ξ_ω = -R ũ, and Ẇ_v = Rᵀ V̇_v - ω × u with ∂/∂ξ_ω = (Rᵀ V̇_v)~,
-    ∂/∂ω = ũ, ∂/∂u = -ω~. The kinematic rows ∂Ẋ/∂X by differences of dψ⁻¹ (no f), ∂Ẋ/∂W =
-    the chart scale. Dense for small models, scipy.sparse (per-body blocks, M by SuperLU) for
-    large ones. tests/test_radau.py holds it against differences of F."""
+    ∂/∂ω = ũ, ∂/∂u = -ω~. The kinematic rows at X = 0, both charts (dψ⁻¹_{-X}(W) = S (W +
+    ½ [X, W]) + O(X²)): ∂Ẋ/∂W = S (the chart scale), ∂Ẋ_ω/∂X_ω = -½ ω~ and on SE(3) also
+    ∂Ẋ_v/∂X_ω = -½ ũ, ∂Ẋ_v/∂X_v = -½ ω~. Dense for small models, scipy.sparse (per-body
+    blocks, M by SuperLU) for large ones (``sparse_kw``: the model's iteration_matrix takes
+    ``sparse``). tests/test_radau.py holds it against differences of F."""
     from ..groups._vec import hat
     m = prob.model
     nX, nv = prob.nX, len(W)
     big = nX + nv > SPARSE_MIN
     quats = prob.start_quats
-    kw = {"sparse": big} if _accepts_sparse(m) else {}
+    kw = {"sparse": big} if sparse_kw else {}
     mats = [m.iteration_matrix(q, V, t, *c, **kw) for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
     if big:
         from scipy import sparse
@@ -351,7 +357,7 @@ def model_jacobian(prob, kin, q, V, W, f0, t):
     else:
         M, Ct, Kt = (x.toarray() if hasattr(x, "toarray") else np.asarray(x, float) for x in mats)
     Vd = prob.model_acceleration(f0[nX:], W, quats)
-    parts = {k: [] for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew")}
+    parts = {k: [] for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew", "Kx")}
     vec = np.asarray(kin.vector_v, int)
     one = (vec, vec, np.ones(len(vec)))
     parts["Zx"].append(one)
@@ -366,6 +372,12 @@ def model_jacobian(prob, kin, q, V, W, f0, t):
         v = s.vidx
         nb, k = v.shape
         D0 = dpsi(np.zeros((nb, k)))                             # ξ = dψ_0 δX
+        kx = np.zeros((nb, k, k))                                # ∂Ẋ/∂X at X = 0 (X's layout)
+        kx[:, :3, :3] = -0.5 * hat(W[s.wang])
+        if s.se3:
+            kx[:, 3:, :3] = -0.5 * hat(W[s.wlin])
+            kx[:, 3:, 3:] = kx[:, :3, :3]
+        add("Kx", s.xidx, kx)
         if not s.se3:
             add("Zx", v, D0)
             continue
@@ -404,17 +416,11 @@ def model_jacobian(prob, kin, q, V, W, f0, t):
     tl = np.rint(prob.to_local(np.arange(nv, dtype=float))).astype(int)
     JWX = Ex - Pr @ (MiK @ Zx + MiC @ Vx)
     JWW = Ew - Pr @ (MiC @ Vw)
-    d = math.sqrt(_EPS)
-    X = np.zeros(nX)
-    JXX = np.empty((nX, nX))
-    for j in range(nX):
-        X[j] = d
-        JXX[:, j] = (prob.kinematics(X, W) - f0[:nX]) / d
-        X[j] = 0.0
+    JXX = (_sparse_csr if big else _dense)((nX, nX), parts["Kx"])
     if big:
         from scipy import sparse
         JXW = sparse.csr_matrix((prob.chart_scale, (np.arange(nX), tl)), shape=(nX, nv))
-        return sparse.bmat([[sparse.csr_matrix(JXX), JXW], [sparse.csr_matrix(JWX)[:, tl], JWW]], format="csc")
+        return sparse.bmat([[JXX, JXW], [sparse.csr_matrix(JWX)[:, tl], JWW]], format="csc")
     J = np.zeros((nX + nv, nX + nv))
     J[:nX, :nX] = JXX
     J[np.arange(nX), nX + tl] = prob.chart_scale
