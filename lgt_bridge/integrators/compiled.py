@@ -181,7 +181,9 @@ class CompiledProblem(LocalProblem):
         _k.stage(_NONE, KX, self._zK, self._one, 0, 0.0, self.work, self.bt, self.vt, self.off)
 
     def end(self, KX, KW, b, h, W0):
-        self._w0(W0)
+        if W0 is not self._W0_src:
+            self._W0[:] = W0
+            self._W0_src = W0
         i = self._pending[0] + 1 if len(self._vd) else len(b)
         c = _k.stage(self._vd, KX, KW, b, i, h, self.work, self.bt, self.vt, self.off)
         if c < 0.0:
