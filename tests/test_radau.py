@@ -32,6 +32,7 @@ def test_tableau_meets_the_collocation_and_quadrature_conditions():
     Lam = rd.TI @ np.linalg.inv(A) @ rd.T
     expect = np.array([[rd.GAMMA, 0, 0], [0, rd.MU.real, -rd.MU.imag], [0, rd.MU.imag, rd.MU.real]])
     np.testing.assert_allclose(Lam, expect, atol=1e-12)
+    np.testing.assert_allclose(rd.LAMBDA, expect, atol=1e-12)       # what the Newton iteration uses
     # γ: the real eigenvalue of A⁻¹, 3 + 3^(2/3) - 3^(1/3) (Hairer & Wanner IV.8)
     assert abs(rd.GAMMA - (3 + 3 ** (2 / 3) - 3 ** (1 / 3))) < 1e-13
 

@@ -59,7 +59,8 @@ def _tableau():
 
 
 C, A, GAMMA, MU, T, TI, E, P = _tableau()
-_TI_C = TI[1] + 1j * TI[2]
+#: T⁻¹ A⁻¹ T: γ, and conj(μ) = α - iβ acting on w2 + i w3 as [[α, β], [-β, α]]
+LAMBDA = np.array([[GAMMA, 0.0, 0.0], [0.0, MU.real, -MU.imag], [0.0, MU.imag, MU.real]])
 
 
 def _rms(x):
@@ -239,6 +240,10 @@ class Radau5(Stepper):
         Wt = TI @ Z0
         Z = Z0
         F = np.empty((3, self.n))
+        dW = np.empty((3, self.n))
+        lam_h = LAMBDA / h
+        inv_scale = 1.0 / scale
+        ts = [t + float(c) * h for c in C]
         old, rate = None, None
         for k in range(self.NEWTON_MAXITER):
             for i in range(3):
@@ -247,15 +252,17 @@ class Radau5(Stepper):
                     c = self.prob.max_cayley(X)
                     if c > self.climit:
                         raise _Cayley(c)
-                Fi = self._F(X, Wk + Z[i, nX:], t + C[i] * h)
+                Fi = self._F(X, Wk + Z[i, nX:], ts[i])
                 if Fi is None:
                     return False, k + 1, Z, rate
                 F[i] = Fi
             self.n_newton += 1
-            dr = lr(TI[0] @ F - (GAMMA / h) * Wt[0])
-            dc = lc(_TI_C @ F - (MU / h) * (Wt[1] + 1j * Wt[2]))
-            dW = np.stack([dr, dc.real, dc.imag])
-            size = _rms(dW / scale)
+            # (Λ/h - I⊗J) ΔW = T⁻¹F - (Λ/h) W: the first row real, rows 2 + i 3 complex
+            R = TI @ F - lam_h @ Wt
+            dW[0] = lr(R[0])
+            dc = lc(R[1] + 1j * R[2])
+            dW[1], dW[2] = dc.real, dc.imag
+            size = _rms(dW * inv_scale)
             if old is not None:
                 rate = size / old
                 if rate >= 1.0 or rate ** (self.NEWTON_MAXITER - k) / (1.0 - rate) * size > self.newton_tol:
