@@ -9,9 +9,11 @@ For stiff models (PD-controlled robots, stiff springs) whose explicit methods ar
 tiny steps by stability: it takes steps sized by accuracy alone, at order 5.
 
 * Simplified Newton on the collocation system, with the Jacobian J = ∂F/∂y at the start of a
-  step (forward differences of F: nX + nv evaluations of f), transformed by the eigenvectors
+  step (from the model's own M, C_t, K_t on unconstrained models, :func:`model_jacobian`;
+  else forward differences of F, nX + nv evaluations of f), transformed by the eigenvectors
   of A⁻¹ into one real and one complex linear system of the size of y (Hairer's trick);
-  J and their LU factors are kept across steps while Newton contracts and h is unchanged.
+  J and their LU factors are kept across steps while Newton contracts and h is unchanged
+  (dense LAPACK LU, SuperLU above SPARSE_MIN unknowns).
 * Error estimate of Hairer's RADAU5: err = (γ/h - J)⁻¹ (F(y_k) + Σ e_i Z_i / h), from the
   embedded third-order formula with an explicit first node; predictive (Gustafsson) step-size
   control. Starting guess: the previous step's collocation polynomial, extrapolated.
@@ -26,7 +28,6 @@ import math
 
 import numpy as np
 
-from ..errors import ChartDomainError
 from .base import StepFailed, Stepper
 from .genalpha_matrix import SPARSE_MIN
 from .rkmk import CAYLEY_LIMIT
@@ -139,8 +140,9 @@ class Radau5(Stepper):
         if self._f0 is None:
             f0 = self._F(np.zeros(self.nX), self.W, t)
             if f0 is None:
+                vmax = float(np.abs(self.V).max(initial=0.0))
                 raise StepFailed(f"radau5: the model's f is not finite at the step's start t = {t:.9g} "
-                                 "(|V| = {:.3g}); check the model's f there.".format(float(np.abs(self.V).max())))
+                                 f"(|V| = {vmax:.3g}); check the model's f there.")
             self._f0 = f0
         return self._f0
 
