@@ -116,6 +116,10 @@ def test_stage_kernels_equal_numpy(group, chart, rng):
         for u, v in zip(outs[1], outs[0]):
             assert close(u, v)
         assert close(res[1][0], res[0][0]) and abs(res[1][1] - res[0][1]) <= 1e-12 * max(1.0, res[0][1])
+        # radau5's F = [Ẋ, Ẇ] at (X, W): the state kernel with the kinematics, f, the conversion
+        F0, F1 = ref.rates(X, W, 0.3), comp.rates(np.ascontiguousarray(X), np.ascontiguousarray(W), 0.3)
+        assert close(F1, F0)
+        assert close(F0[:ref.nX], ref.kinematics(X, W))
 
 
 @given(p=st.lists(st.floats(-1, 1), min_size=4, max_size=4), prev=st.lists(st.floats(-4, 4), min_size=4, max_size=4),
