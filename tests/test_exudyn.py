@@ -184,6 +184,14 @@ def test_lgt_bridge_run_routes_a_legacy_script():
     pos = lambda out: np.array([float(v) for v in out.split("FINAL_POSITION")[1].split()[:3]])
     assert np.abs(pos(native.stdout) - pos(routed.stdout)).max() < 1e-3
     assert exu.SolveDynamic.__module__ == "exudyn.solver"            # nothing left patched here
+    # the implicit method takes the script's tolerances (Exudyn's defaults here) whatever
+    # automaticStepSize says, and lands on the same motion as the explicit pair
+    implicit = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "radau5"],
+                              capture_output=True, text=True, check=True)
+    explicit = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "dop853",
+                               "--rtol", "1e-10", "--atol", "1e-10"], capture_output=True, text=True, check=True)
+    assert "ran radau5 on SE3/exp, rtol=" in implicit.stdout
+    assert np.abs(pos(implicit.stdout) - pos(explicit.stdout)).max() < 1e-6
 
 
 def test_bad_input():
