@@ -41,7 +41,7 @@ class CompiledProblem(LocalProblem):
         self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
         self._pending = None           # (i, t, ts) of that stage
         self._xd = self.work[self.off[_k.OXD]:self.off[_k.OXD] + self.nX]     # the scratch Ẋ
-        self._tl = None                # X's entries in V's layout (rates)
+        self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)     # (rates: no affine part)
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
@@ -116,10 +116,7 @@ class CompiledProblem(LocalProblem):
     def rates(self, X, W, t):
         """[Ẋ, Ẇ] of the local ODE at (X, W) as one vector: the state kernel, the model's f
         (on views of the work array) and the conversion kernel."""
-        if self._tl is None:
-            self._tl = np.rint(self.to_local(np.arange(self.nv, dtype=float))).astype(np.int64)
-            self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)
-        _k.ga_state(self._zv, 0.0, self._zx, W, X, self._tl, self.work, self.bt, self.vt, self.off, True)
+        _k.ga_state(self._zv, 0.0, self._zx, W, X, self.local_index, self.work, self.bt, self.vt, self.off, True)
         Vd = self.model.f(self._q, self._V, t)
         self.n_f += 1
         if type(Vd) is not np.ndarray or Vd.dtype is not _F64:

@@ -34,7 +34,6 @@ Iteration matrix, reused across iterations and steps while Newton contracts:
 Bodies that do not interact give a block-diagonal matrix, inverted per block; otherwise
 sparse LU above SPARSE_MIN unknowns, dense LU below (:func:`.genalpha_matrix.factorize`).
 """
-import inspect
 import math
 from collections import namedtuple
 
@@ -43,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN, Kinematics, coo, csr, factorize
+from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize
 
 
 # what a step's state needs besides Ẇ_{k+1}, in which it is affine:
@@ -60,13 +59,6 @@ def coefficients(rho_inf):
     gamma = 0.5 + af - am
     beta = 0.25 * (gamma + 0.5) ** 2
     return am, af, gamma, beta
-
-
-def _accepts(fn, keyword):
-    try:
-        return keyword in inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return False
 
 
 class GenAlpha(Stepper):
@@ -91,11 +83,11 @@ class GenAlpha(Stepper):
         # the residual in accelerations, or in forces (see the module docstring)
         self.accel_form = not self.nc or type(m).solve_mass is not Model.solve_mass
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
-        self._lam_kw = self.analytic and _accepts(m.iteration_matrix, "lam")
-        self._sparse_kw = self.analytic and _accepts(m.iteration_matrix, "sparse")
+        self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
+        self._sparse_kw = self.analytic and accepts(m.iteration_matrix, "sparse")
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
-        self._to_local = np.rint(problem.to_local(np.arange(problem.nv, dtype=float))).astype(int)
+        self._to_local = problem.local_index
         # SE(3) bodies: the linear rows of the residual in the body frame (P = Rᵀ there)
         self.rotate_rows = any(s.se3 for s in problem.sets)
         self._solve = None

@@ -58,18 +58,33 @@ def coo(X):
 def csr(shape, parts):
     """One matrix from COO triples (duplicates summed): scipy.sparse CSR, or a dense array
     up to DENSE_MAX rows."""
+    return assemble(shape, parts, sparse=shape[0] > DENSE_MAX)
+
+
+def assemble(shape, parts, sparse):
+    """One matrix from COO triples (duplicates summed; zeros dropped): scipy.sparse CSR when
+    ``sparse``, else a dense array."""
     parts = [p for p in parts if len(p[0])]
-    if shape[0] <= DENSE_MAX:
+    if not sparse:
         out = np.zeros(shape)
         for r, c, v in parts:
             np.add.at(out, (r, c), v)
         return out
-    from scipy import sparse
+    from scipy import sparse as sp
     if not parts:
-        return sparse.csr_matrix(shape)
+        return sp.csr_matrix(shape)
     r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
     keep = v != 0
-    return sparse.csr_matrix((v[keep], (r[keep], c[keep])), shape=shape)
+    return sp.csr_matrix((v[keep], (r[keep], c[keep])), shape=shape)
+
+
+def accepts(fn, keyword):
+    """True when the callable ``fn`` takes the keyword argument ``keyword``."""
+    import inspect
+    try:
+        return keyword in inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
 
 
 class BlockDiagonal:

@@ -290,6 +290,14 @@ class LocalProblem:
             X[self.cx] = d[self.cv]
         return X
 
+    @property
+    def local_index(self):
+        """X's entries in V's layout as int64 indices: X = d[local_index] is to_local(d)."""
+        idx = getattr(self, "_local_index", None)
+        if idx is None:
+            idx = self._local_index = np.rint(self.to_local(np.arange(self.nv, dtype=float))).astype(np.int64)
+        return idx
+
     def max_cayley(self, X):
         """Largest |c| among Cayley-chart bodies (a half-turn is |c| -> ∞)."""
         if not len(self.cay_rows):

@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN
+from .genalpha_matrix import SPARSE_MIN, accepts, assemble
 from .rkmk import CAYLEY_LIMIT
 
 _EPS = np.finfo(float).eps
@@ -102,7 +102,7 @@ class Radau5(Stepper):
         self._analytic = (not m.n_constraints and m.has_mass_matrix
                           and callable(getattr(m, "iteration_matrix", None)))
         self._kin = None
-        self._sparse_kw = self._analytic and _accepts_sparse(m)
+        self._sparse_kw = self._analytic and accepts(m.iteration_matrix, "sparse")
         if self._analytic:
             from .genalpha_matrix import Kinematics
             self._kin = Kinematics(problem)
@@ -413,8 +413,7 @@ def model_jacobian(prob, kin, q, V, W, f0, t, sparse_kw=False):
     for name in ("Vw", "Pr"):
         parts[name].append((plain, plain, np.ones(len(plain))))
     shape = (nv, nv)
-    mk = (lambda p: _sparse_csr(shape, p)) if big else (lambda p: _dense(shape, p))
-    Zx, Vx, Ex, Vw, Pr, Ew = (mk(parts[k]) for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew"))
+    Zx, Vx, Ex, Vw, Pr, Ew = (assemble(shape, parts[k], big) for k in ("Zx", "Vx", "Ex", "Vw", "Pr", "Ew"))
     if big:
         from scipy import sparse
         from scipy.sparse.linalg import splu
@@ -422,10 +421,10 @@ def model_jacobian(prob, kin, q, V, W, f0, t, sparse_kw=False):
         MiK, MiC = (sparse.csr_matrix(lu.solve(x.toarray())) for x in (Kt, Ct))
     else:
         MiK, MiC = np.split(np.linalg.solve(M, np.hstack([Kt, Ct])), 2, axis=1)
-    tl = np.rint(prob.to_local(np.arange(nv, dtype=float))).astype(int)
+    tl = prob.local_index
     JWX = Ex - Pr @ (MiK @ Zx + MiC @ Vx)
     JWW = Ew - Pr @ (MiC @ Vw)
-    JXX = (_sparse_csr if big else _dense)((nX, nX), parts["Kx"])
+    JXX = assemble((nX, nX), parts["Kx"], big)
     if big:
         from scipy import sparse
         JXW = sparse.csr_matrix((prob.chart_scale, (np.arange(nX), tl)), shape=(nX, nv))
@@ -436,30 +435,6 @@ def model_jacobian(prob, kin, q, V, W, f0, t, sparse_kw=False):
     J[nX:, :nX] = JWX[:, tl]
     J[nX:, nX:] = JWW
     return J
-
-
-def _dense(shape, parts):
-    out = np.zeros(shape)
-    for r, c, v in parts:
-        np.add.at(out, (r, c), v)
-    return out
-
-
-def _sparse_csr(shape, parts):
-    from scipy import sparse
-    parts = [p for p in parts if len(p[0])]
-    if not parts:
-        return sparse.csr_matrix(shape)
-    r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
-    return sparse.csr_matrix((v, (r, c)), shape=shape)
-
-
-def _accepts_sparse(m):
-    import inspect
-    try:
-        return "sparse" in inspect.signature(m.iteration_matrix).parameters
-    except (TypeError, ValueError):
-        return False
 
 
 class _Solver:
