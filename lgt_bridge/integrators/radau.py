@@ -84,7 +84,11 @@ class Radau5(Stepper):
         self.rtol, self.atol = rtol, atol
         self.nX = problem.nX
         self.n = problem.nX + problem.nv
-        self.newton_tol = max(10.0 * _EPS / max(rtol, 1e-300), min(0.03, math.sqrt(rtol)))
+        # Hairer's RADAU5 Newton tolerance on the scaled norm, from the size of the tolerance:
+        # rtol, or atol when rtol = 0 (pure absolute tolerance), at least 100 eps (rtol = 0
+        # itself would make the tolerance 10 eps / 0: Newton stopping after two iterations)
+        rt = max(rtol if rtol > 0.0 else atol, 100.0 * _EPS)
+        self.newton_tol = max(10.0 * _EPS / rt, min(0.03, math.sqrt(rt)))
         self.J = None
         self._jac_current = False
         self._lu = None                        # (h, real solver, complex solver)
