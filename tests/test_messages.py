@@ -8,7 +8,7 @@ import pytest
 
 from lgt_bridge import scenes, simulate
 from lgt_bridge.errors import InputError
-from lgt_bridge.simulate import mass_defects
+from lgt_bridge.validation import mass_defects
 
 I3 = np.diag([1.0, 2.0, 3.0])
 

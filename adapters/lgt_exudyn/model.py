@@ -17,7 +17,7 @@ import numpy as np
 from lgt_bridge import lgt as _lgt
 from lgt_bridge import params
 from lgt_bridge.errors import InputError, LGTError, ModelError
-from lgt_bridge.groups._vec import hat
+from lgt_bridge.groups.batch import hat
 from lgt_bridge.model import Layout, Model, RigidBody, combine_iteration, solve_kkt
 
 RIGID = {"RigidBodyEP": params.QUAT_WXYZ, "RigidBodyRotVecLG": params.ROTVEC,
@@ -774,7 +774,7 @@ class ExudynModel(Model):
         """InputError when the twist mass matrix at q is singular or indefinite (as
         ``simulate`` checks every model before the first step); a constant positive definite
         M̄ is checked once, by a Cholesky factorization, for all later runs."""
-        from lgt_bridge.simulate import MASS_CHECK_MAX_NV, mass_defects, mass_message
+        from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self._Mbar is not None:
             if self._Mbar_pd is None:
                 try:
@@ -991,7 +991,7 @@ class ExudynModelODE1(ExudynModel):
 
     def check_mass_matrix(self, q):
         """The ODE2 part's mass matrix (the ODE1 block is the identity)."""
-        from lgt_bridge.simulate import mass_defects, mass_message
+        from lgt_bridge.validation import mass_defects, mass_message
         q2 = q[:self.n2]
         M = ExudynModel.mass_matrix.__wrapped__(self, q2)
         A = ExudynModel.constraint_jacobian.__wrapped__(self, q2) if self.n_constraints else None

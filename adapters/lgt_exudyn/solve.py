@@ -16,7 +16,8 @@ from lgt_bridge.integrators.base import StepFailed
 from lgt_bridge.integrators.rkmk import FixedRK
 from lgt_bridge.integrators.tableaux import ADAPTIVE as _TABLEAUX, Tableau
 from lgt_bridge.progress import simulation_bar
-from lgt_bridge.simulate import Driver, _check_inputs, make_stepper
+from lgt_bridge.simulate import Driver, make_stepper
+from lgt_bridge.validation import check_inputs
 
 from .model import ExudynModel
 
@@ -100,7 +101,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         dt = h_init
     else:
         dt = h_out
-    _check_inputs(model, (t0, t1), method, dt if dt is not None else h_out, rtol, atol, None, None,
+    check_inputs(model, (t0, t1), method, dt if dt is not None else h_out, rtol, atol, None, None,
                   None, 1)
     realtime = getattr(ti, "realtime", None)
     if realtime is not None and realtime.active:

@@ -35,7 +35,7 @@ from lgt_bridge.lgt import circle_tau
 from lgt_bridge import params
 from lgt_bridge.errors import InputError
 from lgt_bridge.groups import quaternion as _q
-from lgt_bridge.groups._vec import cross
+from lgt_bridge.groups.batch import cross
 from lgt_bridge.model import CIRCLE_NORM_TOL, Layout, Model, RigidBody, combine_iteration
 
 #: continuous joints: q = (cos θ, sin θ), v = θ̇ (SO(2))
@@ -313,7 +313,7 @@ class PinocchioModel(Model):
         indefinite (e.g. links with zero inertia, as in example-robot-data's iCub and Romeo),
         naming the joints; with constraints, on the motions they allow. Called by
         :func:`lgt_bridge.simulate.simulate` before the first step."""
-        from lgt_bridge.simulate import mass_defects
+        from lgt_bridge.validation import mass_defects
         q = np.asarray(q, float)
         M = self.pin.crba(self.model, self.data, q)
         M = np.triu(M) + np.triu(M, 1).T

@@ -1,0 +1,189 @@
+"""Checks made before any step: the run's options, the initial state, the mass matrix.
+
+Public for the adapters and for users who build their own loops: ``check_inputs``
+(t_span, method, tolerances, initial state), ``check_mass`` / ``mass_defects`` /
+``mass_message`` (a singular or indefinite mass matrix named by its body), and
+``validate_bodies`` (every body's coordinates, batched per parameterization).
+"""
+import numpy as np
+
+from .errors import InputError
+from .integrators import METHODS
+from .integrators.tableaux import FIXED
+
+_SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
+
+def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_steps):
+    try:
+        t0, t1 = (float(v) for v in t_span)
+    except (TypeError, ValueError):
+        raise InputError(f"t_span: expected (t0, t_end), got {t_span!r}.") from None
+    if not (np.isfinite(t0) and np.isfinite(t1)):
+        raise InputError(f"t_span: ({t0}, {t1}) must be finite.")
+    if t1 <= t0:
+        raise InputError(f"t_span: t_end = {t1} must be greater than t0 = {t0}; "
+                         "lgt_bridge integrates forward in time.")
+    if not (method in METHODS or (isinstance(method, str) and method.startswith("scipy:"))):
+        raise InputError(f"unknown method {method!r}; use one of {list(METHODS)} or "
+                         f"'scipy:<Name>' with Name in {list(_SCIPY)}.")
+    if method.startswith("scipy:") and method[6:] not in _SCIPY:
+        raise InputError(f"unknown scipy method {method[6:]!r}; use one of {list(_SCIPY)}.")
+    if dt is not None and not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"dt = {dt} must be a positive finite step size.")
+    if dt is None and (method in FIXED or method == "genalpha"):
+        raise InputError(f"method {method!r} takes fixed steps: pass dt (e.g. dt=1e-3).")
+    if not (np.isfinite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
+        raise InputError(f"rtol = {rtol} must be zero or positive.")
+    if not (np.isfinite(atol) and atol > 0):
+        raise InputError(f"atol = {atol} must be positive.")
+    if not int(max_steps) > 0:
+        raise InputError(f"max_steps = {max_steps} must be a positive integer.")
+    lay = model.layout
+    q0 = np.array(model.q0 if q0 is None else q0, float)
+    V0 = np.array(model.V0 if V0 is None else V0, float)
+    if q0.shape != (lay.nq,):
+        raise InputError(f"q0: got shape {q0.shape}, the model has {lay.nq} coordinates.")
+    if V0.shape != (lay.nv,):
+        raise InputError(f"V0: got shape {V0.shape}, the model has {lay.nv} velocities.")
+    for name, arr, kind in (("q0", q0, "q"), ("V0", V0, "V")):
+        if not np.isfinite(arr).all():
+            i = int(np.flatnonzero(~np.isfinite(arr))[0])
+            raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
+                             "give a finite initial state.")
+    validate_bodies(lay, q0)
+    check_mass(model, q0)
+    if t_eval is not None:
+        t_eval = np.asarray(t_eval, float).ravel()
+        if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):
+            raise InputError("t_eval must be finite and strictly increasing.")
+        if t_eval[0] < t0 or t_eval[-1] > t1:
+            raise InputError(f"t_eval must lie within t_span [{t0}, {t1}].")
+    return t0, t1, q0, V0, t_eval
+
+
+def validate_bodies(lay, q0):
+    """Every body's coordinates, batched per parameterization; on failure the body-by-body
+    pass names the first bad body."""
+    lay.validate_circles(q0, "q0")
+    groups = {}
+    for b in lay.bodies:
+        groups.setdefault((b.param.name, b.rotation_only), []).append(b)
+    for bodies in groups.values():
+        rows = q0[np.array([[*b.pos, *b.rot] for b in bodies])]
+        try:
+            if bodies[0].rotation_only:
+                bodies[0].param._rot(rows, "q0")
+            else:
+                bodies[0].param.validate(rows, "q0")
+        except InputError:
+            for b in bodies:
+                k = lay.bodies.index(b)
+                b.validate(q0, f"q0 of body {k}" + (f" ({b.name})" if b.name else ""))
+            raise
+
+
+#: dense mass-matrix checks above this many velocities are skipped (memory: 8 nv² bytes)
+MASS_CHECK_MAX_NV = 2000
+
+
+def mass_defects(M, A=None, rtol=None):
+    """Directions in which the mass matrix M cannot be inverted: a list of
+    (velocity index, scaled eigenvalue), empty when M is positive definite (on the null
+    space of the constraint Jacobian A, if given: what the index-1 solve needs).
+
+    The test is scale-free: M is scaled symmetrically by its diagonal (so kilograms and
+    kg m² compare), a zero or negative diagonal entry is a defect of its own index, and an
+    eigenvalue of the scaled matrix below ``rtol`` (default max(1e-12, 100 n eps)) is a
+    defect named by the largest entry of its eigenvector. Independent diagonal blocks
+    (the block-diagonal M of free bodies) are checked block by block."""
+    M = np.asarray(M, float)
+    n = len(M)
+    if n == 0:
+        return []
+    if not np.isfinite(M).all():
+        i = int(np.flatnonzero(~np.isfinite(M).all(axis=1))[0])
+        return [(i, float("nan"))]
+    M = 0.5 * (M + M.T)
+    rtol = max(1e-12, 100 * n * np.finfo(float).eps) if rtol is None else rtol
+    d = np.diag(M).copy()
+    dmax = float(np.abs(d).max())
+    if dmax == 0.0:
+        return [(i, 0.0) for i in range(n)]
+    bad = np.flatnonzero(d <= rtol * dmax)
+    if len(bad):
+        return [(int(i), float(d[i] / dmax)) for i in bad]
+    s = 1.0 / np.sqrt(d)
+    S = M * s[:, None] * s[None, :]
+    if A is not None and len(A):
+        # M restricted to the motions the constraints allow: Zᵀ S Z, Z an orthonormal basis
+        # of the null space of A D^(-1/2) (redundant constraints are fine)
+        As = np.asarray(A, float) * s[None, :]
+        _, sv, Vt = np.linalg.svd(As)
+        rank = int((sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)).sum())
+        Z = Vt[rank:].T
+        if Z.shape[1] == 0:
+            return []
+        w, U = np.linalg.eigh(Z.T @ S @ Z)
+        U = Z @ U
+        return [(int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol)]
+    out = []
+    by_size = {}
+    for idx in _diagonal_blocks(S):
+        by_size.setdefault(len(idx), []).append(idx)
+    for group in by_size.values():                 # same-size blocks in one batched eigh
+        I = np.array(group)
+        w, U = np.linalg.eigh(S[I[:, :, None], I[:, None, :]])
+        for b, k in zip(*np.nonzero(w <= rtol)):
+            out.append((int(I[b][np.argmax(np.abs(U[b][:, k]))]), float(w[b, k])))
+    return sorted(out)
+
+
+def _diagonal_blocks(S):
+    """Index sets of the independent diagonal blocks of the symmetric S (its connected
+    components); one block when S is mostly nonzero."""
+    n = len(S)
+    nz = S != 0.0
+    if n <= 12 or nz.sum() > 0.25 * n * n:
+        return [np.arange(n)]
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+    k, labels = connected_components(csr_matrix(nz), directed=False)
+    order = np.argsort(labels, kind="stable")
+    return np.split(order, np.cumsum(np.bincount(labels, minlength=k))[:-1])
+
+
+def check_mass(model, q0):
+    """Reject, before any step, a model whose mass matrix at q0 is singular or indefinite
+    (e.g. links with zero inertia): an explicit adaptive method would otherwise grind to
+    max_steps. A model may provide ``check_mass_matrix(q)`` (raising InputError itself and
+    naming its own joints); otherwise a model with ``mass_matrix`` is checked densely (up to
+    MASS_CHECK_MAX_NV velocities; block by block when M is block-diagonal), on the null
+    space of the constraint Jacobian when it has constraints (a singular M is then fine
+    when the constraints hold the singular direction)."""
+    own = getattr(model, "check_mass_matrix", None)
+    if own is not None:
+        own(q0)
+        return
+    if not model.has_mass_matrix or model.layout.nv > MASS_CHECK_MAX_NV:
+        return
+    M = model.mass_matrix(q0)
+    A = model.constraint_jacobian(q0) if model.n_constraints else None
+    defects = mass_defects(M, A)
+    if defects:
+        raise InputError(mass_message(defects, [model.layout.owner("V", i) for i, _ in defects]))
+
+
+def mass_message(defects, owners):
+    """InputError text for ``mass_defects`` output; ``owners`` names each defect's index."""
+    i, lam = defects[0]
+    kind = "indefinite" if lam < 0 else "singular"
+    names = list(dict.fromkeys(owners))
+    more = ""
+    if len(defects) > 1:
+        more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
+                + (", ..." if len(names) > 6 else ""))
+    return (f"mass matrix at q0 is {kind}: the motion of {owners[0]} (velocity index {i}) has "
+            f"{'negative' if lam < 0 else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
+            "Its acceleration is undefined and an integrator would fail or crawl to max_steps. "
+            "Give every moving body a positive mass and positive principal inertias (a "
+            "zero-inertia link: merge it into its parent, or add a small rotor inertia/armature).")
