@@ -17,21 +17,12 @@ SO(3)xR³. On SE(3) the integrator uses the body twist (ω, Rᵀṙ); see
 """
 import numpy as np
 
-from . import _checks, _series, params
-from .groups._vec import cross as _cross
-from .groups._vec import norm as _norm
+from . import _checks, charts as _charts, params
 from .errors import InputError
 from .groups import quaternion as _q
-from .groups import se3 as _se3
-from .groups import so3 as _so3
-from .groups import so3xr3 as _so3xr3
 
 GROUPS = ("SE3", "SO3xR3")
-CHARTS = ("exp", "cay")
-
-_GROUP_MODULE = {"SE3": _se3, "SO3xR3": _so3xr3}
-_DPSI_INV = {(g, c): getattr(m, f"_d{c}_inv_apply") for g, m in _GROUP_MODULE.items() for c in CHARTS}
-_DPSI = {(g, c): getattr(m, f"_d{c}_apply") for g, m in _GROUP_MODULE.items() for c in CHARTS}
+CHARTS = _charts.NAMES
 
 
 def check_group(group):
@@ -40,10 +31,7 @@ def check_group(group):
     return group
 
 
-def check_chart(chart):
-    if chart not in CHARTS:
-        raise InputError(f"unknown chart {chart!r}; use one of {list(CHARTS)}.")
-    return chart
+check_chart = _charts.check_chart
 
 
 class LGT:
@@ -56,9 +44,10 @@ class LGT:
     def __init__(self, param, group="SE3", chart="exp"):
         self.param = params.get(param)
         self.group = check_group(group)
-        self.chart = check_chart(chart)
-        self._dpsi_inv = _DPSI_INV[(self.group, self.chart)]
-        self._dpsi = _DPSI[(self.group, self.chart)]
+        self.chart_ = _charts.get(chart)
+        self.chart = self.chart_.name
+        maps = self.chart_.on(self.group)
+        self._dpsi_inv, self._dpsi = maps.dpsi_inv_apply, maps.dpsi_apply
 
     def __repr__(self):
         return f"LGT({self.param.name!r}, {self.group!r}, {self.chart!r})"
@@ -78,23 +67,11 @@ class LGT:
         """(τ(q_k, X), p): the coordinates and the unit quaternion (scalar first) of the pose."""
         r, rot, pk = base
         x, y = X[:, :3], X[:, 3:]
-        if self.chart == "exp":
-            # φ and sinc(φ/2) serve both the quaternion and dexp_x y (β = sinc²(φ/2))
-            phi = _norm(x)
-            sh = _series.sinc(0.5 * phi)
-            d = _q._rotvec_minus_one(x, phi, sh)
-        else:
-            d = _q._gibbs_minus_one(x)
         if self.group == "SO3xR3":
+            d, _ = self.chart_.increment(x)
             r1 = r + y
         else:
-            if self.chart == "exp":
-                xy = _cross(x, y)
-                t = y + (0.5 * sh * sh)[:, None] * xy + _series.c3(phi)[:, None] * _cross(x, xy)
-            else:
-                dp = d.copy()
-                dp[:, 0] += 1.0
-                t = y + _q._rotate(dp, y)
+            d, t = self.chart_.increment(x, y)
             r1 = r + _q._rotate(pk, t)
         p = _q._mul_near_identity(pk, d)
         return np.concatenate([r1, self.param._from_quat(p, rot)], axis=1), p
@@ -114,16 +91,17 @@ class RotationLGT:
 
     def __init__(self, param, chart="exp"):
         self.param = params.get(param)
-        self.chart = check_chart(chart)
-        self._dinv = _so3._dexp_inv_apply if self.chart == "exp" else _so3._dcay_inv_apply
-        self._d = _so3._dexp_apply if self.chart == "exp" else _so3._dcay_apply
+        self.chart_ = _charts.get(chart)
+        self.chart = self.chart_.name
+        maps = self.chart_.on("SO3")
+        self._dinv, self._d = maps.dpsi_inv_apply, maps.dpsi_apply
 
     def base(self, rot):
         return None, rot, self.param._to_quat(rot)
 
     def tau_pose(self, base, x):
         _, rot, pk = base
-        d = _q._rotvec_minus_one(x) if self.chart == "exp" else _q._gibbs_minus_one(x)
+        d, _ = self.chart_.increment(x)
         p = _q._mul_near_identity(pk, d)
         return self.param._from_quat(p, rot), p
 

@@ -34,8 +34,15 @@ def matrix_of(param, q):
 
 
 def psi_matrix(chart, X):
+    """ψ(X) from its definition: the matrix exponential, the matrix Cayley transform
+    (I - X^)⁻¹(I + X^), and the second-order Cayley map as the square of cay(X/2)."""
+    if chart == "exp":
+        return sl.expm(se3.hat6(X))
+    if chart == "cay2":
+        C = psi_matrix("cay", 0.5 * np.asarray(X))
+        return C @ C
     A = se3.hat6(X)
-    return sl.expm(A) if chart == "exp" else np.linalg.solve(np.eye(4) - A, np.eye(4) + A)
+    return np.linalg.solve(np.eye(4) - A, np.eye(4) + A)
 
 
 def reference(param, group, chart, q, X):

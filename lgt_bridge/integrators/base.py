@@ -15,6 +15,33 @@ class StepFailed(Exception):
         self.diverged = diverged        # the step blew up (an adaptive method retries smaller)
 
 
+class ChartLimit(Exception):
+    """Internal: a stage would leave its chart's domain (a Cayley chart's coordinates grow
+    without bound towards its singular rotation). ``usage``: |x|/limit (> 1); ``chart``,
+    ``angle``, ``limit``: the worst body's chart and its rotation and the chart's limit, in
+    degrees. Fixed-step methods report it; adaptive methods retry a shorter step."""
+
+    def __init__(self, usage, chart, angle, limit):
+        super().__init__(chart.name)
+        self.usage, self.chart, self.angle, self.limit = usage, chart, angle, limit
+
+    @classmethod
+    def at(cls, problem, usage, X=None):
+        return cls(usage, *problem.chart_overrun(X))
+
+    def shrink(self, h):
+        """A step that keeps the stage short of the limit: 80 % of the one that reached it
+        (the rotation of a stage grows about linearly with h)."""
+        return 0.8 * h * self.limit / self.angle
+
+    def message(self, t, h):
+        end = "a half-turn" if self.chart.max_angle < 3.0 else "a full turn"
+        return (f"{self.chart.title} chart ({self.chart.name!r}) at t = {t:.9g}: a stage of the step h = {h:.3g} rotates a "
+                f"body by {self.angle:.0f}°, beyond the {self.limit:.0f}° a stage may take in this chart "
+                f"(it degenerates towards {end}). Reduce dt, or use chart='exp', chart='cay2' "
+                "(up to 240° per stage) or an adaptive method.")
+
+
 #: what to do about a diverging explicit step (and the generic advice for any method)
 DIVERGED_HINT = ("dt is beyond the method's stability limit for the stiffest mode (a stiff spring or "
                  "contact, a fast rotation): reduce dt, or use method='genalpha' (implicit) or an "

@@ -188,7 +188,5 @@ class CompiledProblem(LocalProblem):
         self._vd = _NONE
         return self._X.copy(), self._W.copy(), self._q.copy(), self._V.copy(), self._p.copy()
 
-    def max_cayley(self, X):
-        if not len(self.cay_rows):
-            return 0.0
-        return float(np.sqrt((np.asarray(X)[self.cay_rows] ** 2).sum(axis=1)).max())
+    def chart_overrun(self, X=None):
+        return super().chart_overrun(self._X if X is None else X)

@@ -28,15 +28,9 @@ import warnings
 
 import numpy as np
 
-from ..groups import se3 as _se3
-from ..groups import so3 as _so3
-from ..groups import so3xr3 as _so3xr3
 from ..groups._vec import cross, hat
 
 _EYE3 = np.eye(3)
-_DPSI = {("SE3", "exp"): _se3._dexp, ("SE3", "cay"): _se3._dcay,
-         ("SO3xR3", "exp"): _so3xr3._dexp, ("SO3xR3", "cay"): _so3xr3._dcay,
-         ("SO3", "exp"): _so3._dexp, ("SO3", "cay"): _so3._dcay}
 
 SPARSE_MIN = 200        # unknowns above which the iteration matrix is factored sparse
 DENSE_MAX = 64          # unknowns up to which it is assembled and factored dense (scipy.sparse's
@@ -119,8 +113,8 @@ class Kinematics:
 
     def __init__(self, prob):
         self.prob = prob
-        self.dpsi = [_DPSI[("SO3" if s.rot_only else "SE3" if s.se3 else "SO3xR3",
-                            "cay" if s.cay else "exp")] for s in prob.sets]
+        self.dpsi = [s.chart.on("SO3" if s.rot_only else "SE3" if s.se3 else "SO3xR3").dpsi
+                     for s in prob.sets]
         # vector and circle coordinates: dψ = 1 (circles: SO(2) is abelian)
         self.vector_v = np.array(prob.layout.vector_v + prob.layout.circle_v, int)
         self.wlin = [s.wlin for s in prob.sets if s.se3]

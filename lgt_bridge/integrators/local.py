@@ -14,6 +14,7 @@ W the velocities in the integrator's representation: per rigid body (ω, Rᵀṙ
 import numpy as np
 
 from .. import backend as _backend
+from .. import charts as _charts
 from .. import lgt as _lgt
 from ..lgt import circle_tau
 from ..errors import InputError
@@ -31,7 +32,7 @@ class BodySet:
         self.rot_only = bodies[0].rotation_only
         self.lgt = _lgt.RotationLGT(param, chart) if self.rot_only else _lgt.LGT(param, group, chart)
         self.se3 = group == "SE3" and not self.rot_only
-        self.cay = chart == "cay"
+        self.chart = _charts.get(chart)
         self.ids = np.array(body_ids)
         self.qidx = np.array([[*b.pos, *b.rot] for b in bodies])
         self.vidx = np.array([b.twist for b in bodies])
@@ -93,13 +94,19 @@ class LocalProblem:
         self.nX = int(xoff[-1]) + len(self.vq) + len(self.cv)
         self.nv = lay.nv
         self.n_f = 0
-        self.cay_rows = np.concatenate([s.xidx[:, :3] for s in self.sets if s.cay] or [np.zeros((0, 3), int)])
-        # exp-coordinate increment -> chart coordinates to second order: cay(ΔX/2) = exp(ΔX) + O(|ΔX|³)
-        # (rotation rows; on SE(3) also the translation rows; the R³ factor of SO(3)xR³ is additive)
+        # the rotation rows of the bodies whose chart has a domain limit, with 1/limit each
+        bounded = [s for s in self.sets if s.chart.bounded]
+        self.chart_rows = np.concatenate([s.xidx[:, :3] for s in bounded] or [np.zeros((0, 3), int)])
+        self.chart_inv_limit = np.concatenate([np.full(len(s.ids), 1.0 / s.chart.limit) for s in bounded]
+                                              or [np.zeros(0)])
+        self.chart_of_row = [s.chart for s in bounded for _ in s.ids]
+        self.bounded = bool(len(self.chart_rows))
+        # dψ⁻¹_0 = scale·I: an exp-coordinate increment ΔX is the chart's scale·ΔX to second
+        # order (Cayley charts: cay(ΔX/2) = exp(ΔX) + O(|ΔX|³)); rotation rows, on SE(3) also
+        # the translation rows (the R³ factor of SO(3)xR³ is additive)
         self.chart_scale = np.ones(self.nX)
         for s in self.sets:
-            if s.cay:
-                self.chart_scale[s.xidx if s.se3 else s.xidx[:, :3]] = 0.5
+            self.chart_scale[s.xidx if s.se3 else s.xidx[:, :3]] = s.chart.scale
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
@@ -193,7 +200,7 @@ class LocalProblem:
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):
         """Stage i of a step from t: X = h Σ_{j<i} a_j KX_j, W = W0 + h Σ a_j KW_j,
         KX[i] = dψ⁻¹_{-X}(W), KW[i] = Ẇ from f at time ts. Returns 0.0, or the largest
-        Cayley |c| (f not called) when it exceeds ``climit``; StepFailed on NaN/inf.
+        chart usage |x|/limit (f not called) when it exceeds ``climit``; StepFailed on NaN/inf.
         KW[i] is complete after the next ``stage``, ``end`` or ``flush`` call (the compiled
         backend converts it in the same kernel call as the next stage's state)."""
         if i == 0:
@@ -201,8 +208,9 @@ class LocalProblem:
         else:
             X = h * (a[:i] @ KX[:i])
             W = W0 + h * (a[:i] @ KW[:i])
-            c = self.max_cayley(X)
+            c = self.chart_usage(X)
             if c > climit:
+                self._stage_X = X
                 return c
         KX[i], KW[i], q, V = self.rhs(X, W, ts, at_start=i == 0)
         if not (np.isfinite(KW[i]).all() and np.isfinite(KX[i]).all()):
@@ -298,8 +306,17 @@ class LocalProblem:
             idx = self._local_index = np.rint(self.to_local(np.arange(self.nv, dtype=float))).astype(np.int64)
         return idx
 
-    def max_cayley(self, X):
-        """Largest |c| among Cayley-chart bodies (a half-turn is |c| -> ∞)."""
-        if not len(self.cay_rows):
+    def chart_usage(self, X):
+        """Largest |x|/limit among bounded-chart bodies (> 1: out of the chart's domain)."""
+        if not self.bounded:
             return 0.0
-        return float(np.sqrt((X[self.cay_rows] ** 2).sum(axis=1)).max())
+        return float((np.sqrt((X[self.chart_rows] ** 2).sum(axis=1)) * self.chart_inv_limit).max())
+
+    def chart_overrun(self, X=None):
+        """(chart, angle, limit angle) in degrees of the body that goes farthest beyond its
+        chart's domain at X (default: the last stage that did)."""
+        X = self._stage_X if X is None else X
+        n = np.sqrt((np.asarray(X)[self.chart_rows] ** 2).sum(axis=1))
+        k = int(np.argmax(n * self.chart_inv_limit))
+        ch = self.chart_of_row[k]
+        return ch, float(np.degrees(ch.angle(n[k]))), float(np.degrees(ch.max_angle))

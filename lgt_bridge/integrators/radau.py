@@ -28,9 +28,8 @@ import math
 
 import numpy as np
 
-from .base import StepFailed, Stepper
+from .base import ChartLimit, StepFailed, Stepper
 from .genalpha_matrix import SPARSE_MIN, accepts, assemble
-from .rkmk import CAYLEY_LIMIT
 
 _EPS = np.finfo(float).eps
 
@@ -99,7 +98,7 @@ class Radau5(Stepper):
         self._f0 = None                        # F(0, W_k) at the current step's start
         self._h_old = self._err_old = None
         self._rejected = False
-        self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
+        self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
         m = problem.model
         # the model's M, C_t, K_t give J exactly on unconstrained models (a constrained model's
         # f solves for its constraint forces: its J is differenced)
@@ -241,7 +240,7 @@ class Radau5(Stepper):
 
     def _collocation(self, t, h, Z0, scale, lr, lc):
         """Simplified Newton on the collocation system: (converged, iterations, Z, rate) or
-        raises _Cayley."""
+        raises ChartLimit."""
         nX, Wk = self.nX, self.W
         Wt = TI @ Z0
         Z = Z0
@@ -255,9 +254,9 @@ class Radau5(Stepper):
             for i in range(3):
                 X = Z[i, :nX]
                 if self.climit < np.inf:
-                    c = self.prob.max_cayley(X)
+                    c = self.prob.chart_usage(X)
                     if c > self.climit:
-                        raise _Cayley(c)
+                        raise ChartLimit.at(self.prob, c, X)
                 Fi = self._F(X, Wk + Z[i, nX:], ts[i])
                 if Fi is None:
                     return False, k + 1, Z, rate
@@ -283,10 +282,10 @@ class Radau5(Stepper):
     def attempt(self, t, h):
         try:
             return self._attempt(t, h)
-        except _Cayley as lim:
+        except ChartLimit as lim:
             self.n_rejected += 1
             self._rejected = True
-            return False, 0.8 * h * math.atan(CAYLEY_LIMIT) / math.atan(lim.c)
+            return False, lim.shrink(h)
 
     def _attempt(self, t, h):
         nX, Wk = self.nX, self.W
@@ -449,11 +448,6 @@ class _Solver:
 
     def __call__(self, b):
         return self.getrs(self.lu, self.piv, b)[0]
-
-
-class _Cayley(Exception):
-    def __init__(self, c):
-        self.c = c
 
 
 class RadauDense:

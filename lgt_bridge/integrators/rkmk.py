@@ -11,10 +11,7 @@ import math
 import numpy as np
 
 from ..errors import ChartDomainError
-from .base import StepFailed, Stepper
-
-#: a stage whose Cayley coordinates exceed this (|c| = tan(φ/2): φ = 90°) is refused
-CAYLEY_LIMIT = 1.0
+from .base import ChartLimit, StepFailed, Stepper
 
 
 class ExplicitRK(Stepper):
@@ -31,7 +28,7 @@ class ExplicitRK(Stepper):
         self._b = np.ascontiguousarray(tableau.b, dtype=float)
         self._c = [float(x) for x in tableau.c]      # Python floats: stage times without numpy scalars
         self._fsal = False                     # KW[0] holds the first stage of the next step
-        self.climit = np.inf if not len(problem.cay_rows) else CAYLEY_LIMIT
+        self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
 
     def set_state(self, q, V, W=None, quats=None, copy=True):
         super().set_state(q, V, W, quats, copy)
@@ -49,7 +46,7 @@ class ExplicitRK(Stepper):
             return self._attempt(t, h)
 
     def stages(self, t, h):
-        """All stages of one step; returns (X1, W1, q1, V1, quats) or raises _CayleyLimit."""
+        """All stages of one step; returns (X1, W1, q1, V1, quats) or raises ChartLimit."""
         prob, KX, KW, W0, A, lim = self.prob, self.KX, self.KW, self.W, self._A, self.climit
         for i, c in enumerate(self._c):
             if i == 0 and self._fsal:
@@ -57,13 +54,8 @@ class ExplicitRK(Stepper):
                 continue
             cm = prob.stage(KX, KW, i, A[i], h, W0, t, t + c * h, lim)
             if cm:
-                raise _CayleyLimit(cm)
+                raise ChartLimit.at(prob, cm)
         return prob.end(KX, KW, self._b, h, W0)
-
-
-class _CayleyLimit(Exception):
-    def __init__(self, c):
-        self.c = c
 
 
 class FixedRK(ExplicitRK):
@@ -92,12 +84,8 @@ class FixedRK(ExplicitRK):
     def _attempt(self, t, h):
         try:
             X1, W1, q1, V1, quats = self.stages(t, h)
-        except _CayleyLimit as lim:
-            raise StepFailed(
-                f"Cayley chart at t = {t:.9g}: a stage of the step h = {h:.3g} rotates a body by "
-                f"{2 * np.degrees(np.arctan(lim.c)):.0f}° (|c| = {lim.c:.3g} > {CAYLEY_LIMIT}); "
-                "the chart degenerates towards a half-turn. Reduce dt, or use chart='exp' or an "
-                "adaptive method.", ChartDomainError) from None
+        except ChartLimit as lim:
+            raise StepFailed(lim.message(t, h), ChartDomainError) from None
         # every stage was checked finite; q1, V1 (built from X1, W1) are checked before the growth
         self.check_finite(t + h, q1, V1)
         self._check_growth(t, h, W1)
@@ -124,7 +112,7 @@ class AdaptiveRK(ExplicitRK):
         self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
-        self._hcay = np.inf                    # steps below this keep Cayley stages short of a half-turn
+        self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
         self._errsums = _error_sums_kernel() if problem.compiled else _error_sums
 
@@ -157,12 +145,12 @@ class AdaptiveRK(ExplicitRK):
         tab = self.tab
         try:
             X1, W1, q1, V1, quats = self.stages(t, h)
-        except _CayleyLimit as lim:
+        except ChartLimit as lim:
             self.n_rejected += 1
             self._facmax = 1.0
-            # the chart angle 2·atan|c| grows about linearly with h: retry at 80 % of the step
-            # that reaches the limit, and keep later steps below it (regrowing 20 % per step)
-            self._hcay = 0.8 * h * math.atan(CAYLEY_LIMIT) / math.atan(lim.c)
+            # retry at 80 % of the step that reaches the limit, and keep later steps below it
+            # (regrowing 20 % per step)
+            self._hcay = lim.shrink(h)
             return False, min(self._hcay, 0.5 * h)
         except StepFailed as exc:
             if not exc.diverged:
@@ -239,9 +227,7 @@ class DenseStep:
             for k in range(len(c)):
                 s = ns + k
                 a = np.ascontiguousarray(A[k][:s])
-                cm = prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)
-                if cm:   # pragma: no cover - no limit passed
-                    raise StepFailed("dense output: Cayley limit")
+                prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)   # no limit passed
             prob.flush(KX, KW)
         finally:
             prob.restore(snap)

@@ -4,9 +4,9 @@ through τ. Multistep solvers (BDF, LSODA) are restarted every macro step."""
 import numpy as np
 
 from .base import StepFailed, Stepper
-from .rkmk import CAYLEY_LIMIT
 
-#: a macro step whose exp-chart rotation exceeds this is retried shorter (dexp⁻¹ is singular at 2π)
+#: a macro step whose exp-chart rotation exceeds this (rad) is retried shorter (dexp⁻¹ is
+#: singular at 2π); a bounded chart's macro step is held to its own stage limit
 EXP_LIMIT = 2.5
 
 
@@ -37,9 +37,9 @@ class ScipyStepper(Stepper):
         self.n_internal += len(sol.t) - 1
         y1 = sol.y[:, -1]
         X1, W1 = y1[:prob.nX], y1[prob.nX:]
-        rot = np.concatenate([X1[s.xidx[:, :3]] for s in prob.sets])
-        limit = max((CAYLEY_LIMIT if s.cay else EXP_LIMIT) for s in prob.sets) if prob.sets else np.inf
-        if len(rot) and np.sqrt((rot ** 2).sum(axis=1)).max() > limit:
+        over = any((s.chart.angle(np.sqrt((X1[s.xidx[:, :3]] ** 2).sum(axis=1)))
+                    > (s.chart.max_angle if s.chart.bounded else EXP_LIMIT)).any() for s in prob.sets)
+        if over:
             self.n_rejected += 1
             return False, 0.5 * h
         q1, quats = prob.configuration(X1)

@@ -20,12 +20,13 @@ import numpy as np
 from numba import njit
 
 from . import guard_cache
-from .rotations import c3, cross, dser, eser, from_quat, gibbs_minus_one, qmul, rotate, rotvec_minus_one, to_quat
+from .charts import increment, rot_rates, se3_rates, translation, usage
+from .rotations import cross, from_quat, qmul, rotate, to_quat
 
 guard_cache(__file__)
 
 # columns of the body table
-PARAM, SE3, CAY, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
+PARAM, SE3, CHART, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
 NCOL = 19
 
 # the work array of a problem: one float64 vector holding, at these offsets (``off``),
@@ -61,7 +62,7 @@ def body_table(sets, codes):
     for s in sets:
         n, nrot = len(s.ids), s.lgt.param.nrot
         t = np.full((n, NCOL), -1, np.int64)
-        t[:, PARAM], t[:, SE3], t[:, CAY], t[:, ROT_ONLY] = codes[s.lgt.param.name], s.se3, s.cay, s.rot_only
+        t[:, PARAM], t[:, SE3], t[:, CHART], t[:, ROT_ONLY] = codes[s.lgt.param.name], s.se3, s.chart.code, s.rot_only
         t[:, XOFF], t[:, NROT] = s.xidx[:, 0], nrot
         if s.rot_only:
             t[:, ROT:ROT + nrot] = s.qidx
@@ -87,7 +88,7 @@ def bases(bt, q, pk):
 def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
     """Stage combination, τ, model velocity and local kinematics of every body.
     ``ns = 0``: the step's start (X = 0, q = q_k). Returns the largest |c| of the
-    Cayley-chart bodies (a half-turn is |c| -> ∞)."""
+    bounded-chart bodies' |x|/limit (> 1: a stage left its chart's domain)."""
     nX, nv = X.shape[0], W.shape[0]
     # row by row (contiguous, vectorized); the same sums in the same order as a @ K
     for j in range(nX):
@@ -111,19 +112,16 @@ def stage_state(KX, KW, a, ns, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p):
 @njit(cache=True, error_model="numpy", inline="always")
 def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
     """τ, model velocity and (``kin``) local kinematics Ẋ of every body at (X, W) (``start``:
-    X = 0, q = q_k); returns the largest |c| of the Cayley-chart bodies."""
+    X = 0, q = q_k); returns the largest |x|/limit of the bounded-chart bodies (> 1: out of
+    the chart's domain)."""
     cmax = 0.0
     for b in range(bt.shape[0]):
-        se3, cay, ro, xo = bt[b, SE3] == 1, bt[b, CAY] == 1, bt[b, ROT_ONLY] == 1, bt[b, XOFF]
+        se3, ch, ro, xo = bt[b, SE3] == 1, bt[b, CHART], bt[b, ROT_ONLY] == 1, bt[b, XOFF]
         nrot = bt[b, NROT]
         x0, x1, x2 = X[xo], X[xo + 1], X[xo + 2]
         k0, k1, k2, k3 = pk[b, 0], pk[b, 1], pk[b, 2], pk[b, 3]
-        phi, sh = 0.0, 1.0
-        if cay:
-            d0, d1, d2, d3 = gibbs_minus_one(x0, x1, x2)
-            cmax = max(cmax, math.sqrt(x0 * x0 + x1 * x1 + x2 * x2))
-        else:
-            d0, d1, d2, d3, phi, sh = rotvec_minus_one(x0, x1, x2)
+        d0, d1, d2, d3, phi, sh = increment(ch, x0, x1, x2)
+        cmax = max(cmax, usage(ch, x0, x1, x2))
         if start:
             p0, p1, p2, p3 = k0, k1, k2, k3
             for c in range(3):
@@ -144,14 +142,7 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
             if not ro:
                 y0, y1, y2 = X[xo + 3], X[xo + 4], X[xo + 5]
                 if se3:
-                    if cay:
-                        v0, v1, v2 = rotate(1.0 + d0, d1, d2, d3, y0, y1, y2)
-                        t0, t1, t2 = y0 + v0, y1 + v1, y2 + v2
-                    else:
-                        xy0, xy1, xy2 = cross(x0, x1, x2, y0, y1, y2)
-                        xx0, xx1, xx2 = cross(x0, x1, x2, xy0, xy1, xy2)
-                        f1, f2 = 0.5 * sh * sh, c3(phi)
-                        t0, t1, t2 = y0 + f1 * xy0 + f2 * xx0, y1 + f1 * xy1 + f2 * xx1, y2 + f1 * xy2 + f2 * xx2
+                    t0, t1, t2 = translation(ch, x0, x1, x2, y0, y1, y2, d0, d1, d2, d3, phi, sh)
                     y0, y1, y2 = rotate(k0, k1, k2, k3, t0, t1, t2)
                 i0, i1, i2 = bt[b, POS], bt[b, POS + 1], bt[b, POS + 2]
                 q[i0], q[i1], q[i2] = qk[i0] + y0, qk[i1] + y1, qk[i2] + y2
@@ -168,38 +159,15 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
                 else:
                     V[j0], V[j1], V[j2] = W[j0], W[j1], W[j2]
             continue
-        xw0, xw1, xw2 = cross(x0, x1, x2, w0, w1, w2)
-        if cay:
-            cw = x0 * w0 + x1 * w1 + x2 * w2
-            Xd[xo], Xd[xo + 1], Xd[xo + 2] = (0.5 * (w0 + xw0 + cw * x0), 0.5 * (w1 + xw1 + cw * x1),
-                                              0.5 * (w2 + xw2 + cw * x2))
-            dd = 0.0
-        else:
-            dd = dser(phi)
-            xxw0, xxw1, xxw2 = cross(x0, x1, x2, xw0, xw1, xw2)
-            Xd[xo], Xd[xo + 1], Xd[xo + 2] = (w0 + 0.5 * xw0 + dd * xxw0, w1 + 0.5 * xw1 + dd * xxw1,
-                                              w2 + 0.5 * xw2 + dd * xxw2)
+        Xd[xo], Xd[xo + 1], Xd[xo + 2] = rot_rates(ch, x0, x1, x2, w0, w1, w2, phi)
         if ro:
             continue
         j0, j1, j2 = bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
         u0, u1, u2 = W[j0], W[j1], W[j2]
         if se3:
             V[j0], V[j1], V[j2] = rotate(p0, p1, p2, p3, u0, u1, u2)
-            y0, y1, y2 = X[xo + 3], X[xo + 4], X[xo + 5]
-            yw0, yw1, yw2 = cross(y0, y1, y2, w0, w1, w2)
-            if cay:
-                z0, z1, z2 = u0 + yw0, u1 + yw1, u2 + yw2
-                cz0, cz1, cz2 = cross(x0, x1, x2, z0, z1, z2)
-                Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = 0.5 * (z0 + cz0), 0.5 * (z1 + cz1), 0.5 * (z2 + cz2)
-            else:
-                xu0, xu1, xu2 = cross(x0, x1, x2, u0, u1, u2)
-                xxu0, xxu1, xxu2 = cross(x0, x1, x2, xu0, xu1, xu2)
-                xyw0, xyw1, xyw2 = cross(x0, x1, x2, yw0, yw1, yw2)
-                yxw0, yxw1, yxw2 = cross(y0, y1, y2, xw0, xw1, xw2)
-                ee = eser(phi) * (x0 * y0 + x1 * y1 + x2 * y2)
-                Xd[xo + 3] = u0 + 0.5 * (xu0 + yw0) + dd * (xxu0 + xyw0 + yxw0) + ee * xxw0
-                Xd[xo + 4] = u1 + 0.5 * (xu1 + yw1) + dd * (xxu1 + xyw1 + yxw1) + ee * xxw1
-                Xd[xo + 5] = u2 + 0.5 * (xu2 + yw2) + dd * (xxu2 + xyw2 + yxw2) + ee * xxw2
+            Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = se3_rates(ch, x0, x1, x2, X[xo + 3], X[xo + 4], X[xo + 5],
+                                                           w0, w1, w2, u0, u1, u2, phi)
         else:
             V[j0], V[j1], V[j2] = u0, u1, u2
             Xd[xo + 3], Xd[xo + 4], Xd[xo + 5] = u0, u1, u2
@@ -267,7 +235,7 @@ def stage(Vd, KX, KW, a, i, h, w, bt, vt, off):
     """One fused call per stage: when ``Vd`` is not empty, the stage derivative of stage
     i - 1 from the model's V̇ (KW[i-1]; -1.0 is returned when KX[i-1] or KW[i-1] is not
     finite); then, when ``a`` is not empty, the state of stage i (X, W, q, V, p in the work
-    array, KX[i] = dψ⁻¹_{-X}(W)), returning the largest Cayley |c|."""
+    array, KX[i] = dψ⁻¹_{-X}(W)), returning the largest chart usage |x|/limit."""
     X, W, q, V, W0, qk, pk, p = views(w, off)
     if Vd.shape[0] > 0:
         if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
