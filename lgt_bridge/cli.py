@@ -12,20 +12,14 @@ from .errors import InputError, LGTError
 
 _GROUPS = ("SE3", "SO3xR3", "auto")
 _CHARTS = ("exp", "cay", "auto")
-_SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
-
-
-def _methods():
-    from .integrators import METHODS
-    return METHODS
 
 
 def check_method(m, where):
-    """InputError unless ``m`` names a bridge method or 'scipy:<Name>'."""
-    ok = m in _methods() or (m.startswith("scipy:") and m[6:] in _SCIPY)
-    if not ok:
-        raise InputError(f"{where}: unknown method {m!r}; use one of {', '.join(_methods())} "
-                         f"or scipy:<Name> with Name in {', '.join(_SCIPY)}.")
+    """InputError unless ``m`` names a bridge method or 'scipy:<Name>' (what kind a method
+    is, is asked of :func:`lgt_bridge.bench.registry.method_kind` alone)."""
+    from .bench.registry import method_choices, method_kind
+    if method_kind(m) is None:
+        raise InputError(f"{where}: unknown method {m!r}; use one of {method_choices()}.")
 
 
 def _one_line(exc):

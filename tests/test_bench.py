@@ -113,7 +113,7 @@ def test_bench_repeat_zero_keeps_the_pass_times_and_says_they_are_distorted(tmp_
 
 @pytest.mark.parametrize("repeat", [-1, 1.5, "3"])
 def test_bench_bad_repeat_is_rejected_before_the_reference_run(monkeypatch, repeat):
-    monkeypatch.setattr(bench, "simulate", lambda *a, **k: pytest.fail("the reference run started"))
+    monkeypatch.setattr(bench.runner, "simulate", lambda *a, **k: pytest.fail("the reference run started"))
     with pytest.raises(InputError, match="repeat"):
         bench.sweep("free_body", ["rkmk4"], ["SO3xR3"], ["exp"], [], [1e-2], workers=1, repeat=repeat)
 

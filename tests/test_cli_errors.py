@@ -106,8 +106,8 @@ def test_run_accepts_group_and_chart_auto():
 def no_reference(monkeypatch):
     def boom(*a, **k):
         raise AssertionError("simulate ran before the options were checked")
-    monkeypatch.setattr(bench, "simulate", boom)
-    monkeypatch.setattr(bench, "load_scene", boom)
+    monkeypatch.setattr(bench.runner, "simulate", boom)
+    monkeypatch.setattr(bench.runner, "load_scene", boom)
 
 
 @pytest.mark.parametrize("opts, word", [
@@ -133,13 +133,13 @@ def test_bench_unknown_scene_before_the_reference_run(no_reference, capsys):
 def test_a_failing_run_becomes_a_row(monkeypatch, tmp_path, capsys):
     scene = tmp_path / "tiny.py"
     scene.write_text("from lgt_bridge import scenes\n\ndef make():\n    return scenes.free_body(), 0.02\n")
-    real = bench.simulate
+    real = bench.runner.simulate
 
     def flaky(model, span, **kw):
         if kw.get("method") == "rkmk2":
             raise StepError("boom: diverged")
         return real(model, span, **kw)
-    monkeypatch.setattr(bench, "simulate", flaky)
+    monkeypatch.setattr(bench.runner, "simulate", flaky)
     out = tmp_path / "out"
     assert cli.main(["bench", f"{scene}:make", "--methods", "rkmk2,rkmk4", "--groups", "SE3", "--charts", "exp",
                      "--dts", "0.01", "--no-auto", "--no-plots", "--workers", "1", "--out", str(out)]) == 0

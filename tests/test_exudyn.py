@@ -273,7 +273,7 @@ def test_bench_scene_with_exudyn_natives(tmp_path):
     bridge = [r for r in rows if r["group"] == "SO3xR3"][0]
     assert bridge["success"] and bridge["pose_error"] < 1e-5
     assert "native" in bench.best_at(rows, 1e-3) and "bridge" in bench.best_at(rows, 1e-3)
-    auto = bench._one("exudyn_heavy_top", "dopri5", "auto", "auto", 1e-7, *ref_state)
+    auto = bench.runner._one("exudyn_heavy_top", "dopri5", "auto", "auto", 1e-7, *ref_state)
     text = bench.write_report(tmp_path, "exudyn_heavy_top", ref, rows + [auto], plots=False).read_text()
     assert "| Exudyn generalized-α, EP | native | engine | n=2000 |" in text and "## auto against" in text
 

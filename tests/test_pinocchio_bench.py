@@ -48,8 +48,8 @@ def fake_loaders(monkeypatch):
 def no_run(monkeypatch):
     def boom(*a, **k):
         raise AssertionError("a run started before the options were checked")
-    monkeypatch.setattr(bench, "simulate", boom)
-    monkeypatch.setattr(bench, "load_scene", boom)
+    monkeypatch.setattr(bench.runner, "simulate", boom)
+    monkeypatch.setattr(bench.runner, "load_scene", boom)
 
 
 # --- registry and option checks: no loaders needed ----------------------------------------------
