@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .integrators import registry as _methods
 from .integrators.local import per_body
 from .lgt import check_chart, check_group
 
@@ -85,7 +86,8 @@ def choose(model, group="auto", chart="auto", *, method="rkmk4", project=True):
     nb = lay.nbodies
     groups = per_body(group, nb, "group", lambda g: g if g == "auto" else check_group(g))
     charts = per_body(chart, nb, "chart", lambda c: c if c == "auto" else check_chart(c))
-    enforced = method == "genalpha" or (project and model.n_constraints > 0)
+    index3 = _methods.get(method).constraints == "index3"      # the method solves them itself
+    enforced = index3 or (project and model.n_constraints > 0)
     offsets = offset_joints(model) if "auto" in groups else [False] * nb
     names, reasons = [], []
     for i, b in enumerate(lay.bodies):
@@ -102,7 +104,7 @@ def choose(model, group="auto", chart="auto", *, method="rkmk4", project=True):
             elif offsets[i]:
                 groups[i] = "SO3xR3"
                 why.append("SO(3)×R³: joint away from the body frame, enforced by "
-                           + ("the index-3 solve" if method == "genalpha" else "projection"))
+                           + ("the index-3 solve" if index3 else "projection"))
             else:
                 groups[i] = "SO3xR3"
                 why.append("SO(3)×R³: no joint acts at an offset on this body")

@@ -8,18 +8,30 @@ keep their traceback.
 import argparse
 import sys
 
+from . import charts as _charts
 from .errors import InputError, LGTError
+from .integrators import registry as _methods
+from .lgt import GROUPS as _lgt_groups
 
-_GROUPS = ("SE3", "SO3xR3", "auto")
-_CHARTS = ("exp", "cay", "auto")
+_GROUPS = (*_lgt_groups, "auto")
+_CHARTS = (*_charts.NAMES, "auto")
 
 
 def check_method(m, where):
-    """InputError unless ``m`` names a bridge method or 'scipy:<Name>' (what kind a method
-    is, is asked of :func:`lgt_bridge.bench.registry.method_kind` alone)."""
-    from .bench.registry import method_choices, method_kind
-    if method_kind(m) is None:
-        raise InputError(f"{where}: unknown method {m!r}; use one of {method_choices()}.")
+    """InputError unless ``m`` names a method of the registry."""
+    try:
+        _methods.get(m)
+    except InputError:
+        raise InputError(f"{where}: unknown method {m!r}; use one of {_methods.choices_text()}.") from None
+
+
+def _kinds():
+    """The method names by kind, for the help texts (from the registry)."""
+    fixed = ", ".join(_methods.by(steps="fixed"))
+    adaptive = ", ".join(_methods.by(steps="adaptive"))
+    implicit = ", ".join(_methods.by(steps="adaptive", implicit=True))
+    scipy = ", ".join(_methods.SCIPY)
+    return fixed, adaptive, implicit, scipy
 
 
 def _one_line(exc):
@@ -187,6 +199,10 @@ def _scene_epilog():
 
 
 def _parser():
+    fixed, adaptive, implicit, scipy = _kinds()
+    charts_help = ", ".join(f"{c.name} ({c.title})" for c in _charts.CHARTS.values())
+    pairs = " and ".join(_methods.by(steps="adaptive", fixed_form=True))
+    others = ", ".join(_methods.by(steps="adaptive", fixed_form=False))
     ap = argparse.ArgumentParser(prog="lgt-bridge", description="Lie group integration of "
                                  "absolute-coordinate multibody models (Exudyn, Pinocchio).")
     ap.add_argument("--debug", action="store_true", help="show the traceback of errors")
@@ -209,26 +225,25 @@ def _parser():
                        "mbs.SolveDynamic call it makes is integrated by the bridge (the script's\n"
                        "sensors, solution file and final state keep working). Other solver calls and\n"
                        "hand-written loops (e.g. a Pinocchio aba loop) run as written.",
-                       epilog="tolerances: adaptive methods (dopri5, dop853, radau5, scipy:*) use --rtol/--atol\n"
+                       epilog=f"tolerances: adaptive methods ({adaptive}, scipy:*) use --rtol/--atol\n"
                        "  (--rtol 0: pure absolute tolerance); when absent, the script's own\n"
                        "  simulationSettings.timeIntegration.relativeTolerance/absoluteTolerance\n"
                        "  (Exudyn's defaults: 1e-8, 1e-8) if its automaticStepSize is True. With\n"
-                       "  automaticStepSize False and no --rtol/--atol, dopri5 and dop853 take fixed\n"
-                       "  steps of (endTime-startTime)/numberOfSteps (radau5 keeps the settings'\n"
+                       f"  automaticStepSize False and no --rtol/--atol, {pairs} take fixed\n"
+                       f"  steps of (endTime-startTime)/numberOfSteps ({others} keep{'s' * (',' not in others)} the settings'\n"
                        "  tolerances; scipy:* use rtol=1e-6, atol=1e-8).\n"
-                       "  Fixed-step methods (euler, rkmk2, rkmk4, genalpha) step at that interval.\n"
+                       f"  Fixed-step methods ({fixed}) step at that interval.\n"
                        "  minimumStepSize, initialStepSize and startTime are honoured as by Exudyn.\n"
                        "Each routed call prints one line: method, group, chart, tolerances, steps.")
     r.add_argument("script", help="the legacy script (.py)")
     r.add_argument("--method", default="dopri5", metavar="METHOD",
-                   help="euler, rkmk2, rkmk4, genalpha (fixed step); dopri5, dop853, radau5 (adaptive; "
-                   "radau5 implicit, for stiff models); "
-                   "scipy:<Name> with Name in RK23, RK45, DOP853, Radau, BDF, LSODA (default dopri5)")
+                   help=f"{fixed} (fixed step); {adaptive} (adaptive; {implicit} implicit, for stiff "
+                   f"models); scipy:<Name> with Name in {scipy} (default dopri5)")
     r.add_argument("--group", default="SE3", choices=_GROUPS,
                    help="Lie group of the local coordinates; auto: per body, what the model needs "
                    "(default SE3)")
     r.add_argument("--chart", default="exp", choices=_CHARTS,
-                   help="local chart: exponential or Cayley; auto: per body (default exp)")
+                   help=f"local chart: {charts_help}; auto: per body (default exp)")
     r.add_argument("--rtol", type=float, default=None, help="relative tolerance (see below)")
     r.add_argument("--atol", type=float, default=None, help="absolute tolerance (see below)")
     r.add_argument("--progress", **progress)
@@ -243,11 +258,11 @@ def _parser():
     b.add_argument("scene", help="a scene name (listed below), path/to/file.py:function returning "
                    "(model, t_end), or 'extremes' for the extremes suite's report")
     b.add_argument("--methods", default="rkmk4,dopri5",
-                   help="comma-separated: euler, rkmk2, rkmk4, genalpha, dopri5, dop853, radau5, scipy:<Name> "
+                   help=f"comma-separated: {', '.join(_methods.METHODS)}, scipy:<Name> "
                    "(default rkmk4,dopri5)")
     b.add_argument("--groups", default="SE3,SO3xR3", help="comma-separated: SE3, SO3xR3, auto "
                    "(default SE3,SO3xR3)")
-    b.add_argument("--charts", default="exp,cay", help="comma-separated: exp, cay, auto (default exp,cay)")
+    b.add_argument("--charts", default="exp,cay", help=f"comma-separated: {', '.join(_CHARTS)} (default exp,cay)")
     b.add_argument("--tols", default="1e-5,1e-7,1e-9", help="rtol = atol of adaptive methods")
     b.add_argument("--dts", default="1e-3,5e-4,2.5e-4", help="steps of fixed-step methods (s)")
     b.add_argument("--scenario", default=None, metavar="NAME",

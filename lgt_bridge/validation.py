@@ -8,12 +8,19 @@ Public for the adapters and for users who build their own loops: ``check_inputs`
 import numpy as np
 
 from .errors import InputError
-from .integrators import METHODS
-from .integrators.tableaux import FIXED
+from .integrators import registry as _methods
 
-_SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_steps):
+    """Every input of a run, before any step: (t0, t_end, q0, V0, t_eval) checked and
+    converted, or InputError saying what, where and what to do."""
+    t0, t1 = check_span(t_span)
+    check_options(method, dt, rtol, atol, max_steps)
+    q0, V0 = check_state(model, q0, V0)
+    return t0, t1, q0, V0, check_t_eval(t_eval, t0, t1)
+
+
+def check_span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
@@ -23,14 +30,16 @@ def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_step
     if t1 <= t0:
         raise InputError(f"t_span: t_end = {t1} must be greater than t0 = {t0}; "
                          "lgt_bridge integrates forward in time.")
-    if not (method in METHODS or (isinstance(method, str) and method.startswith("scipy:"))):
-        raise InputError(f"unknown method {method!r}; use one of {list(METHODS)} or "
-                         f"'scipy:<Name>' with Name in {list(_SCIPY)}.")
-    if method.startswith("scipy:") and method[6:] not in _SCIPY:
-        raise InputError(f"unknown scipy method {method[6:]!r}; use one of {list(_SCIPY)}.")
+    return t0, t1
+
+
+def check_options(method, dt, rtol, atol, max_steps):
+    """The method (from the registry), its step or tolerances, max_steps; returns the
+    registry's :class:`~.integrators.registry.Method`."""
+    spec = _methods.get(method)
     if dt is not None and not (np.isfinite(dt) and dt > 0):
         raise InputError(f"dt = {dt} must be a positive finite step size.")
-    if dt is None and (method in FIXED or method == "genalpha"):
+    if dt is None and spec.fixed:
         raise InputError(f"method {method!r} takes fixed steps: pass dt (e.g. dt=1e-3).")
     if not (np.isfinite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
         raise InputError(f"rtol = {rtol} must be zero or positive.")
@@ -38,6 +47,12 @@ def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_step
         raise InputError(f"atol = {atol} must be positive.")
     if not int(max_steps) > 0:
         raise InputError(f"max_steps = {max_steps} must be a positive integer.")
+    return spec
+
+
+def check_state(model, q0=None, V0=None):
+    """The initial state (default: the model's): shapes, finiteness, every body's
+    coordinates, the mass matrix; returns float copies (q0, V0)."""
     lay = model.layout
     q0 = np.array(model.q0 if q0 is None else q0, float)
     V0 = np.array(model.V0 if V0 is None else V0, float)
@@ -52,13 +67,17 @@ def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_step
                              "give a finite initial state.")
     validate_bodies(lay, q0)
     check_mass(model, q0)
+    return q0, V0
+
+
+def check_t_eval(t_eval, t0, t1):
     if t_eval is not None:
         t_eval = np.asarray(t_eval, float).ravel()
         if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):
             raise InputError("t_eval must be finite and strictly increasing.")
         if t_eval[0] < t0 or t_eval[-1] > t1:
             raise InputError(f"t_eval must lie within t_span [{t0}, {t1}].")
-    return t0, t1, q0, V0, t_eval
+    return t_eval
 
 
 def validate_bodies(lay, q0):

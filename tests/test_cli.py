@@ -33,5 +33,5 @@ def test_top_level_names():
     import lgt_bridge
     from lgt_bridge import simulate as sim
     assert callable(sim) and sim is lgt_bridge.simulate
-    from lgt_bridge.simulate import Driver  # the module stays importable by path
-    assert Driver is not None
+    from lgt_bridge.simulate import Simulation  # the module stays importable by path
+    assert Simulation is not None

@@ -8,10 +8,11 @@ import pytest
 import references as ref
 from lgt_bridge import scenes
 from lgt_bridge.groups import quaternion as Q
-from lgt_bridge.integrators.local import make_problem
+from lgt_bridge.integrators.problem import make_problem
 from lgt_bridge.integrators.rkmk import AdaptiveRK, FixedRK
 from lgt_bridge.integrators.tableaux import DOPRI5, dop853
-from lgt_bridge.simulate import Driver, simulate
+from lgt_bridge.simulate import simulate
+from lgt_bridge.simulation import Simulation
 
 
 def _rot(q, param_rows=slice(3, 7)):
@@ -47,7 +48,7 @@ def test_dop853_fitted_order_is_eight(group):
     for h in hs:
         m = scenes.heavy_top(False)
         st = FixedRK(make_problem(m, group, "exp"), dop853())
-        q, _ = Driver(m, st, h, 0.0, m.q0, m.V0, t_end=T).advance_to(T)
+        q, _ = Simulation.from_stepper(m, st, h, 0.0, m.q0, m.V0, t_end=T).advance_to(T)
         errs.append(ref.angle(_rot(q), R_ref))
     assert errs[-1] > 1e-12                 # still above rounding
     assert abs(ref.slope(hs, errs) - 8.0) <= 0.3, errs

@@ -13,7 +13,7 @@ import pytest
 from lgt_bridge import scenes
 from lgt_bridge.bench import pose_error
 from lgt_bridge.integrators import radau as rd
-from lgt_bridge.integrators.local import make_problem
+from lgt_bridge.integrators.problem import make_problem
 from lgt_bridge.simulate import simulate
 
 import backend_checks

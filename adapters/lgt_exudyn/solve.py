@@ -10,18 +10,14 @@ needs, and interpolate Exudyn's output steps with their dense output.
 import sys
 import time
 
-from lgt_bridge import auto as _auto
 from lgt_bridge.errors import InputError, StepError
+from lgt_bridge.integrators import registry
 from lgt_bridge.integrators.base import StepFailed
-from lgt_bridge.integrators.rkmk import FixedRK
-from lgt_bridge.integrators.tableaux import ADAPTIVE as _TABLEAUX, Tableau
 from lgt_bridge.progress import simulation_bar
-from lgt_bridge.simulate import Driver, make_stepper
+from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
 from .model import ExudynModel
-
-ADAPTIVE = ("dopri5", "dop853")
 
 _noted = set()          # one-time notes already printed in this process
 
@@ -80,16 +76,17 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                          f"simulationSettings.timeIntegration.startTime = {t0}; set endTime > startTime.")
     h_out = (t1 - t0) / n
     auto_step = bool(ti.automaticStepSize)
+    spec = registry.get(method)
     # automaticStepSize=False: Exudyn's DOPRI5 steps at h_out; so does ours, unless the
-    # caller asked for error control by passing tolerances
-    fixed_tableau = method in ADAPTIVE and not auto_step and rtol is None and atol is None
-    # radau5 has no fixed-step form: it is error-controlled whatever automaticStepSize says
-    controlled = (method in ADAPTIVE and not fixed_tableau) or method == "radau5"
-    adaptive = controlled or str(method).startswith("scipy:")
+    # caller asked for error control by passing tolerances (a method without a fixed form,
+    # radau5, is error-controlled whatever automaticStepSize says)
+    fixed_tableau = spec.fixed_form and not auto_step and rtol is None and atol is None
+    controlled = spec.adaptive and not fixed_tableau
+    adaptive = spec.uses_tolerances and not fixed_tableau
     tol_source = "given"
     if rtol is None or atol is None:
         tol_source = "default"
-        if adaptive and (auto_step or method == "radau5"):
+        if adaptive and (auto_step or not spec.fixed_form):
             tol_source = "timeIntegration.relative/absoluteTolerance"
             rtol = rtol if rtol is not None else float(ti.relativeTolerance)
             atol = atol if atol is not None else float(ti.absoluteTolerance)
@@ -108,29 +105,26 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         _note_once("realtime", "simulationSettings.timeIntegration.realtime.active (simulateInRealtime) "
                    "is ignored by lgt_bridge's SolveDynamic: it runs as fast as it can.")
     group_asked, chart_asked = group, chart
-    if _auto.wants_auto(group, chart):
-        choice = _auto.choose(model, group, chart, method=method, project=project)
-        group, chart = choice.groups, choice.charts
-    stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
-                               project=project, rho_inf=rho_inf, span=(t0, t1))
-    if fixed_tableau:
-        stepper = FixedRK(stepper.prob, _fixed_tableau(method), stepper.projector)
     # a pre-step user function changes the model at Exudyn's step times (Exudyn calls it
     # once per step, before the step, with the step's end time): the bridge's steps then
     # end on Exudyn's steps instead of stepping over them with dense output
     prestep = _has_user_function(mbs, "GetPreStepUserFunction")
-    if hasattr(stepper, "min_step"):             # genalpha halves failing steps down to it
-        stepper.min_step = float(ti.minimumStepSize)
-    drv = _Driver(model, stepper, dt, t0, model.q0, model.V0, t_end=None if prestep else t1,
-                  consistent=project)
-    first_step = drv.h
-    if controlled:
-        drv.h_min = h_min
-        drv.h_event = max(drv.h_event, 4.0 * h_min)     # contact switches: located to ≥ 4 h_min
-        drv.why = (f"the error control of {method} at rtol={rtol:g}, atol={atol:g} needs smaller steps there "
-                   "(a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
-                   "minimumStepSize, or use method='genalpha'.")
-    bar = simulation_bar(progress, t0, t1, drv, stepper, desc="SolveDynamic")
+    # minimumStepSize: the floor of an error-controlled step and of genalpha's step halving
+    sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
+                     t0=t0, t_end=None if prestep else t1, project=project, rho_inf=rho_inf,
+                     fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), checked=True)
+    group, chart, stepper = sim.group, sim.chart, sim.stepper
+    if not controlled:
+        sim.min_step = 0.0
+    else:
+        sim.min_step = h_min
+        sim.h_event = max(sim.h_event, 4.0 * h_min)     # contact switches: located to ≥ 4 h_min
+        sim.min_step_name = "simulationSettings.timeIntegration.minimumStepSize"
+        sim.min_step_why = (f"the error control of {method} at rtol={rtol:g}, atol={atol:g} needs smaller steps "
+                            "there (a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
+                            "minimumStepSize, or use method='genalpha'.")
+    first_step = sim.first_step
+    bar = simulation_bar(progress, t0, t1, sim, stepper, desc="SolveDynamic")
     on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
     sd = mbs.systemData
     failure = []
@@ -140,13 +134,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         h = solver.it.currentStepSize
         ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
         if prestep:                  # the model may have changed: no stage carried over
-            stepper.set_state(stepper.q, stepper.V)
+            sim.restart()
         try:
-            q_out, V_out = drv.advance_to(ts + h, on_step)
+            q_out, V_out = sim.advance_to(ts + h, on_step)
         except StepFailed as exc:
             failure.append(str(exc))
-            model.write_back(stepper.q, stepper.V, drv.t)
-            solver.it.endTime = drv.t          # stop Exudyn's loop at the last good state
+            model.write_back(stepper.q, stepper.V, sim.t)
+            solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
             return True
         model.write_back(q_out, V_out, ts + h)
         if accelerations:      # Exudyn's solution file and acceleration sensors read them
@@ -169,14 +163,14 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,
               tolerance_source=tol_source if adaptive else None, dt=None if adaptive else h_out,
-              n_steps=drv.n_steps, n_f=stepper.prob.n_f,
+              n_steps=sim.n_steps, n_f=stepper.prob.n_f,
               n_rejected=stepper.n_rejected, n_newton=stepper.n_newton,
               wall_s=time.perf_counter() - wall0, exudyn_steps=n, success=not failure,
               message=failure[0] if failure else "reached endTime")
     if controlled:
         st.update(first_step=first_step, minimum_step=h_min)
-    if drv.initial_projection is not None:
-        st["initial_projection"] = drv.initial_projection
+    if sim.initial_projection is not None:
+        st["initial_projection"] = sim.initial_projection
     if model.redundant_rows:
         st["redundant_constraints"] = len(model.redundant_rows)
     if stepper.projector is not None:
@@ -185,10 +179,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     if storeSolver:
         mbs.sys["dynamicSolver"] = solver
     if verbose or (verbose is None and ti.verboseMode > 0):
-        print(f"lgt-bridge: SolveDynamic {describe(st)}: {drv.n_steps} steps, {stepper.prob.n_f} "
+        print(f"lgt-bridge: SolveDynamic {describe(st)}: {sim.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")
     if failure:
-        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]} The system is left at t = {drv.t:.9g}.")
+        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]} The system is left at t = {sim.t:.9g}.")
     if updateInitialValues:
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), exu.ConfigurationType.Initial)
@@ -201,31 +195,6 @@ def _has_user_function(mbs, getter):
         return bool(getattr(mbs, getter)())
     except Exception:
         return False
-
-
-def _fixed_tableau(method):
-    """The tableau of an embedded pair for fixed steps: its propagating weights b, without the
-    FSAL end-point stage (b is 0 there; a fixed step would evaluate it for nothing)."""
-    tab = _TABLEAUX[method]()
-    k = tab.stages - 1 if tab.fsal and tab.b[-1] == 0.0 else tab.stages
-    return Tableau(tab.name, tab.A[:k, :k], tab.b[:k], tab.c[:k], tab.order)
-
-
-class _Driver(Driver):
-    """A Driver whose error control may not shrink the step below ``h_min`` (Exudyn's
-    minimumStepSize). A small step the caller chose (initialStepSize) or the landing
-    step on endTime is not a failure; the controller reducing its step below h_min is."""
-
-    h_min = 0.0
-    why = ""
-
-    def _step(self, target, on_step):
-        h_before = self.h
-        super()._step(target, on_step)
-        if self.h < self.h_min and self.h < h_before and self.t < target - 1e-12 * max(1.0, abs(target)):
-            raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
-                             f"simulationSettings.timeIntegration.minimumStepSize = {self.h_min:g}: "
-                             + self.why)
 
 
 def _summary(resolved, asked):
@@ -242,7 +211,7 @@ def describe(st):
         src = {"given": "", "default": " (bridge default)"}.get(
             st["tolerance_source"], f" (from simulationSettings.{st['tolerance_source']})")
         tol = f"rtol={st['rtol']:g}, atol={st['atol']:g}{src}"
-    elif st["method"] in ADAPTIVE:
+    elif registry.get(st["method"]).fixed_form:
         tol = f"fixed step {st['dt']:g} s (automaticStepSize=False: endTime/numberOfSteps)"
     else:
         tol = f"fixed step {st['dt']:g} s (from endTime/numberOfSteps)"

@@ -19,8 +19,7 @@ import numpy as np
 
 from .. import scenes as _scenes
 from ..errors import InputError
-from ..integrators import METHODS
-from ..integrators.tableaux import FIXED as _FIXED_RK
+from ..integrators import registry as _methods
 from ..plugins import adapters
 
 
@@ -152,28 +151,23 @@ def load_scene(spec, scenario=None):
 
 
 # --- methods ------------------------------------------------------------------------------
-SCIPY = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
+SCIPY = _methods.SCIPY
 
 
 def method_kind(name):
-    """How a sweep drives method ``name``: "dt" when it takes fixed steps (the fixed RKMK
-    tableaux and genalpha), "tol" when it is adaptive and takes rtol = atol (dopri5, dop853,
-    radau5, scipy:<Name>), None when no method has this name. The one place where the bench
-    and the CLI ask what kind a method is (to switch to the method registry, change this)."""
-    if name in _FIXED_RK or name == "genalpha":
-        return "dt"
-    if name in METHODS or (name.startswith("scipy:") and name[6:] in SCIPY):
-        return "tol"
-    return None
+    """How a sweep drives method ``name``: "dt" when it takes fixed steps, "tol" when it is
+    adaptive and takes rtol = atol (adaptive and scipy's macro-step methods), None when no
+    method has this name (read from the method registry)."""
+    try:
+        return "dt" if _methods.get(name).fixed else "tol"
+    except InputError:
+        return None
 
 
-def method_choices():
-    """The names :func:`method_kind` knows, in words for an error message."""
-    return f"{', '.join(METHODS)} or scipy:<Name> with Name in {', '.join(SCIPY)}"
+method_choices = _methods.choices_text
 
-
-#: the fixed-step methods (a sweep gives them --dts), from :func:`method_kind`
-FIXED = tuple(m for m in METHODS if method_kind(m) == "dt")
+#: the fixed-step methods (a sweep gives them --dts)
+FIXED = tuple(_methods.by(steps="fixed"))
 
 
 def check_options(spec, methods, groups, charts, tols, dts, scenario=None):

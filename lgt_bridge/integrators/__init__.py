@@ -1,7 +1,5 @@
 """Integrators of the bridge: RKMK (fixed and adaptive), Radau IIA, scipy through τ,
-generalized-α."""
-from .tableaux import ADAPTIVE, FIXED
-
-METHODS = tuple(FIXED) + tuple(ADAPTIVE) + ("radau5", "genalpha")
+generalized-α; the methods' table is :mod:`.registry`."""
+from .registry import METHODS
 
 __all__ = ["METHODS"]

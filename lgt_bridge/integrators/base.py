@@ -71,10 +71,37 @@ def first_nonfinite(layout, kind, arr):
 
 
 class Stepper:
-    """Holds (q, W) between steps; ``attempt(t, h)`` advances or declines."""
+    """The contract every method's stepper keeps (the simulation object relies on nothing
+    else):
+
+    - ``set_state(q, V)``, ``snapshot()``/``restore(snap)``: the state between steps, in the
+      model's coordinates (``q``, ``V``; ``W`` the integrator's velocities);
+    - ``attempt(t, h) -> (accepted, h_new)``: one step from t; an adaptive method declines
+      and proposes a shorter step, a fixed one returns ``h_new = None``; a failure raises
+      :class:`StepFailed`;
+    - ``adaptive``: it chooses its steps (``initial_step(t)`` gives the first);
+    - ``dense_capable`` and ``dense``: a continuous extension of the last accepted step,
+      ``dense(t) -> (q, V)`` for t within it (None before the first step);
+    - ``step_size(dt, span)``: the fixed (or macro) step to use when ``dt`` is given or not;
+    - ``min_step``: the shortest step a method that halves failing steps may take;
+    - counters: ``n_rejected``, ``n_newton``, ``n_jacobians``, and ``prob.n_f``;
+    - ``projector``: the projection onto the constraints after each step, or None.
+    """
 
     adaptive = False
+    dense_capable = False
+    dense = None
+    n_jacobians = 0
+    min_step = 0.0
     DIVERGED_HINT = DIVERGED_HINT      # what a diverged step of this method suggests
+
+    def initial_step(self, t):
+        """The first trial step of an adaptive method."""
+        raise NotImplementedError(f"{type(self).__name__} takes the steps it is given")
+
+    def step_size(self, dt, span):
+        """The step a driver should use: ``dt`` (None for an adaptive method)."""
+        return dt
 
     def __init__(self, problem, projector=None):
         self.prob = problem

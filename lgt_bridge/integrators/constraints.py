@@ -14,7 +14,7 @@ The residuals before and after are kept for the result's statistics.
 import numpy as np
 
 from ..model import solve_schur
-from .local import make_problem
+from .problem import make_problem
 
 
 class Projector:

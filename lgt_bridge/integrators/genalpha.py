@@ -61,6 +61,12 @@ def coefficients(rho_inf):
     return am, af, gamma, beta
 
 
+
+def build(method, problem, o):
+    """genalpha's stepper (the registry's builder): index-3, no projection."""
+    return GenAlpha(problem, rho_inf=o["rho_inf"], newton_tol=o["newton_tol"])
+
+
 class GenAlpha(Stepper):
 
     THETA = 0.1

@@ -11,9 +11,10 @@ W the velocities in the integrator's representation: per rigid body (ω, Rᵀṙ
     Ẋ     = dψ⁻¹_{-X}(W)  (bodies),   v (vector and circle coordinates)
     Ẇ     = f(q, V, t)  with  V = (ω, R u) on SE(3)  and  d/dt(Rᵀṙ) = Rᵀr̈ - ω × Rᵀṙ
 """
+from contextlib import contextmanager
+
 import numpy as np
 
-from .. import backend as _backend
 from .. import charts as _charts
 from .. import lgt as _lgt
 from ..lgt import circle_tau
@@ -56,14 +57,6 @@ def per_body(option, n, name, check):
         raise InputError(f"{name}: got {len(vals)} values for {n} rigid bodies; give one value "
                          "or one per body.")
     return [check(v) for v in vals]
-
-
-def make_problem(model, group="SE3", chart="exp", backend=None):
-    """The local problem on the selected backend (:mod:`lgt_bridge.backend`)."""
-    if _backend.compiled(backend):
-        from .compiled import CompiledProblem
-        return CompiledProblem(model, group, chart)
-    return LocalProblem(model, group, chart)
 
 
 class LocalProblem:
@@ -125,6 +118,17 @@ class LocalProblem:
 
     def restore(self, snap):
         self.q_k, self.bases = snap
+
+    @contextmanager
+    def based_at(self, base):
+        """Evaluate within a past step (dense output): its base restored for the ``with``
+        block, the current one put back afterwards."""
+        snap = self.snapshot()
+        self.restore(base)
+        try:
+            yield self
+        finally:
+            self.restore(snap)
 
     def configuration(self, X):
         """q = τ(q_k, X) and the quaternion of every body set."""

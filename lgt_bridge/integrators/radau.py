@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from .base import ChartLimit, StepFailed, Stepper
+from .control import initial_step, rms
 from .genalpha_matrix import SPARSE_MIN, accepts, assemble
 
 _EPS = np.finfo(float).eps
@@ -63,9 +64,9 @@ C, A, GAMMA, MU, T, TI, E, P = _tableau()
 LAMBDA = np.array([[GAMMA, 0.0, 0.0], [0.0, MU.real, -MU.imag], [0.0, MU.imag, MU.real]])
 
 
-def _rms(x):
-    v = x.ravel()
-    return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
+def build(method, problem, o):
+    """radau5's stepper (the registry's builder)."""
+    return Radau5(problem, o["rtol"], o["atol"], o["projector"])
 
 
 class Radau5(Stepper):
@@ -126,18 +127,8 @@ class Radau5(Stepper):
         return F
 
     def initial_step(self, t):
-        """Hairer-Nørsett-Wanner's starting step (II.4) for the embedded order 3."""
-        y0 = np.concatenate([np.zeros(self.nX), self.W])
-        f0 = self._start_rates(t)
-        sc = self.atol + self.rtol * np.abs(y0)
-        d0, d1 = _rms(y0 / sc), _rms(f0 / sc)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        f1 = self._F(h0 * f0[:self.nX], self.W + h0 * f0[self.nX:], t + h0)
-        if f1 is None:
-            return h0
-        d2 = _rms((f1 - f0) / sc) / h0
-        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** 0.25
-        return min(100 * h0, h1)
+        """The starting step (:func:`.control.initial_step`) for the embedded order 3."""
+        return initial_step(self._F, self.nX, self.W, t, self.rtol, self.atol, 4, f0=self._start_rates(t))
 
     def _start_rates(self, t):
         if self._f0 is None:
@@ -267,7 +258,7 @@ class Radau5(Stepper):
             dW[0] = lr(R[0])
             dc = lc(R[1] + 1j * R[2])
             dW[1], dW[2] = dc.real, dc.imag
-            size = _rms(dW * inv_scale)
+            size = rms(dW * inv_scale)
             if old is not None:
                 rate = size / old
                 if rate >= 1.0 or rate ** (self.NEWTON_MAXITER - k) / (1.0 - rate) * size > self.newton_tol:
@@ -309,12 +300,12 @@ class Radau5(Stepper):
         ZE = (E @ Z) / h
         err = lr(f0 + ZE)
         esc = self.atol + self.rtol * np.maximum(np.abs(yk), np.abs(y1))
-        en = _rms(err / esc)
+        en = rms(err / esc)
         if en > 1.0 and (self._rejected or self._h_old is None):
             # the estimate of the first or a rejected step, filtered once more (stiff components)
             Fe = self._F(err[:nX], Wk + err[nX:], t)
             if Fe is not None:
-                en = _rms(lr(Fe + ZE) / esc)
+                en = rms(lr(Fe + ZE) / esc)
         safety = 0.9 * (2 * self.NEWTON_MAXITER + 1) / (2 * self.NEWTON_MAXITER + n_iter)
         if not math.isfinite(en) or en > 1.0:
             self.n_rejected += 1
@@ -469,10 +460,5 @@ class RadauDense:
 
     def __call__(self, t):
         y = self.local([(t - self.t0) / self.h])[0]
-        prob = self.st.prob
-        snap = prob.snapshot()
-        prob.restore(self.base)
-        try:
+        with self.st.prob.based_at(self.base) as prob:
             return prob.state_at(y[:self.nX], y[self.nX:])
-        finally:
-            prob.restore(snap)

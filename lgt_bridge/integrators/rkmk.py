@@ -11,7 +11,20 @@ import math
 import numpy as np
 
 from ..errors import ChartDomainError
+from . import tableaux
 from .base import ChartLimit, StepFailed, Stepper
+from .control import PIController, initial_step
+
+
+def build(method, problem, o):
+    """The stepper of an RKMK method of the registry (fixed tableaux; embedded pairs, or
+    their fixed form with ``o["fixed_steps"]``)."""
+    if method.fixed:
+        return FixedRK(problem, tableaux.FIXED[method.name], o["projector"])
+    tab = tableaux.ADAPTIVE[method.name]()
+    if o["fixed_steps"]:
+        return FixedRK(problem, tableaux.fixed_form(tab), o["projector"])
+    return AdaptiveRK(problem, tab, o["rtol"], o["atol"], o["projector"], first_step=o["dt"])
 
 
 class ExplicitRK(Stepper):
@@ -98,15 +111,12 @@ class AdaptiveRK(ExplicitRK):
     err^(-1/8) with factors in [1/3, 6] for DOP853) and dense output."""
 
     adaptive = True
-    SAFETY = 0.9
 
     def __init__(self, problem, tableau, rtol, atol, projector=None, first_step=None):
         super().__init__(problem, tableau, projector)
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
-        self._err_prev = 1e-4
-        self.ALPHA, self.BETA, self.FACMIN, self.FACMAX = tableau.control
-        self._facmax = self.FACMAX
+        self.control = PIController(*tableau.control, order=tableau.err_order)
         e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
         self._e5 = np.ascontiguousarray(e5, dtype=float)
         self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
@@ -116,22 +126,15 @@ class AdaptiveRK(ExplicitRK):
         self.dense_capable = tableau.dense
         self._errsums = _error_sums_kernel() if problem.compiled else _error_sums
 
-    def _norm(self, y, scale):
-        return float(np.sqrt(np.mean((y / scale) ** 2)))
-
     def initial_step(self, t):
-        """Hairer-Nørsett-Wanner's starting step (II.4), on y = (X, W) with X = 0."""
+        """The starting step (:func:`.control.initial_step`)."""
         prob = self.prob
-        KX, KW, _, _ = prob.rhs(np.zeros(prob.nX), self.W, t)
-        y0 = np.concatenate([np.zeros(prob.nX), self.W])
-        f0 = np.concatenate([KX, KW])
-        sc = self.atol + self.rtol * np.abs(y0)
-        d0, d1 = self._norm(y0, sc), self._norm(f0, sc)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        KX1, KW1, _, _ = prob.rhs(h0 * KX, self.W + h0 * KW, t + h0)
-        d2 = self._norm(np.concatenate([KX1, KW1]) - f0, sc) / h0
-        h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / (self.tab.err_order))
-        return min(100 * h0, h1)
+
+        def rates(X, W, ts):
+            KX, KW, _, _ = prob.rhs(X, W, ts)
+            return np.concatenate([KX, KW])
+
+        return initial_step(rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order)
 
     def error_norm(self, h, X1, W1):
         s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
@@ -147,7 +150,7 @@ class AdaptiveRK(ExplicitRK):
             X1, W1, q1, V1, quats = self.stages(t, h)
         except ChartLimit as lim:
             self.n_rejected += 1
-            self._facmax = 1.0
+            self.control.rejected()
             # retry at 80 % of the step that reaches the limit, and keep later steps below it
             # (regrowing 20 % per step)
             self._hcay = lim.shrink(h)
@@ -156,17 +159,14 @@ class AdaptiveRK(ExplicitRK):
             if not exc.diverged:
                 raise
             self.n_rejected += 1              # a trial step that blew up: retry smaller
-            self._facmax = 1.0
+            self.control.rejected()
             return False, 0.25 * h
         en = self.error_norm(h, X1, W1)
         if not np.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
         if en <= 1.0:
-            fac = self.SAFETY * en ** -self.ALPHA * self._err_prev ** self.BETA if en > 0 else self._facmax
-            fac = min(self._facmax, max(self.FACMIN, fac))
-            self._err_prev = max(en, 1e-4)
-            self._facmax = self.FACMAX
+            fac = self.control.accepted(en)
             if self.dense_capable:
                 self.dense = DenseStep(self, t, h, X1, W1)
             i_last = tab.stages - 1
@@ -181,8 +181,7 @@ class AdaptiveRK(ExplicitRK):
             self._hcay *= 1.2
             return True, h_new
         self.n_rejected += 1
-        self._facmax = 1.0
-        return False, h * max(self.FACMIN, self.SAFETY * en ** (-1.0 / tab.err_order))
+        return False, h * self.control.rejected(en)
 
 
 def _error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
@@ -221,16 +220,12 @@ class DenseStep:
             return ("P", h * (P.T @ KX[:len(P)]), h * (P.T @ KW[:len(P)]))
         A, c = tab.extra
         ns = tab.stages
-        snap = prob.snapshot()
-        prob.restore(self.base)
-        try:
+        with prob.based_at(self.base):
             for k in range(len(c)):
                 s = ns + k
                 a = np.ascontiguousarray(A[k][:s])
                 prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)   # no limit passed
             prob.flush(KX, KW)
-        finally:
-            prob.restore(snap)
         n = ns + len(c)
         out = []
         for K, y1, y0 in ((KX[:n], self.X1, 0.0), (KW[:n], self.W1, self.W0)):
@@ -255,13 +250,8 @@ class DenseStep:
         else:
             X, W = _dop853_eval(FX, th), self.W0 + _dop853_eval(FW, th)
         prob = self.st.prob
-        snap = prob.snapshot()
-        prob.restore(self.base)
-        try:
-            q, V = prob.state_at(X, W)
-        finally:
-            prob.restore(snap)
-        return q, V
+        with prob.based_at(self.base):
+            return prob.state_at(X, W)
 
 
 def _dop853_eval(F, x):

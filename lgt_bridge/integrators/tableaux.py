@@ -96,3 +96,10 @@ def dop853():
 
 FIXED = {t.name: t for t in (EULER, RK2, RK4)}
 ADAPTIVE = {DOPRI5.name: lambda: DOPRI5, "dop853": dop853}
+
+
+def fixed_form(tab):
+    """The tableau of an embedded pair for fixed steps: its propagating weights b, without
+    the FSAL end-point stage (b is 0 there; a fixed step would evaluate it for nothing)."""
+    k = tab.stages - 1 if tab.fsal and tab.b[-1] == 0.0 else tab.stages
+    return Tableau(tab.name, tab.A[:k, :k], tab.b[:k], tab.c[:k], tab.order)

@@ -10,6 +10,11 @@ from .base import StepFailed, Stepper
 EXP_LIMIT = 2.5
 
 
+def build(method, problem, o):
+    """The stepper of ``scipy:<Name>`` (the registry's builder)."""
+    return ScipyStepper(problem, method.name[6:], o["rtol"], o["atol"], o["projector"])
+
+
 class ScipyStepper(Stepper):
 
     adaptive = False
@@ -18,6 +23,15 @@ class ScipyStepper(Stepper):
         super().__init__(problem, projector)
         self.name, self.rtol, self.atol = name, rtol, atol
         self.n_internal = 0
+
+    def step_size(self, dt, span):
+        """The macro step: ``dt``, or by default a tenth of the span, at most half a radian of
+        the fastest body's initial rotation."""
+        if dt is not None:
+            return dt
+        V0 = self.prob.model.V0
+        wmax = max([np.abs(V0[list(b.twist[:3])]).max() for b in self.prob.layout.bodies] + [1e-12])
+        return min((span[1] - span[0]) / 10, 0.5 / wmax) if span else 0.5 / wmax
 
     def _fun(self, t, y):
         nX = self.prob.nX

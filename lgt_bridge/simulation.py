@@ -1,0 +1,295 @@
+"""The simulation object: set up once, then advance.
+
+:class:`Simulation` checks a model and a method's options, resolves ``"auto"`` groups and
+charts, builds the method's stepper from the registry (:mod:`.integrators.registry`) with
+its local problem and projector, makes the initial state consistent, and then advances:
+
+- :meth:`Simulation.advance_to` — to one time, returning (q, V) there (interpolated by the
+  method's continuous extension when it has one); the engine drop-ins call this;
+- :meth:`Simulation.run` — to ``t_end`` collecting outputs (every step, or ``t_eval``) into
+  a :class:`~.result.SimulationResult`; called again, it continues from where the last call
+  ended (consecutive short horizons, model-predictive control), without repeating set-up.
+
+Hooks: ``on_step(t, q, V)`` after every accepted step; the model's ``write_back`` after
+every step (engine sensors), ``post_step``/discontinuous states (contact switches located
+by shortening the step), and ``min_step`` (a controller shrinking the step below it fails,
+saying why). :func:`~lgt_bridge.simulate` is one ``Simulation(...).run(...)``.
+"""
+import time
+import warnings
+from functools import partial
+
+import numpy as np
+
+from . import auto as _auto
+from .errors import ChartDomainError, InputError, ModelError, ModelNote
+from .integrators.base import StepFailed
+from .integrators.constraints import Projector, project_initial
+from .integrators.problem import make_problem
+from .progress import simulation_bar
+from .result import SimulationResult
+from .validation import check_options, check_state, check_t_eval
+
+
+def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
+                 project=True, rho_inf=0.9, newton_tol=1e-10, span=None, fixed_steps=False):
+    """The stepper behind a method name (the registry's builder), with its local problem
+    and projector. Returns (stepper, dt): dt is the (macro) step to use (None: adaptive)."""
+    from .integrators import registry
+    spec = registry.get(method)
+    prob = make_problem(model, group, chart)
+    projector = Projector(model) if (spec.projects and project and model.n_constraints) else None
+    stepper = spec.build(prob, dt=dt, rtol=rtol, atol=atol, projector=projector, rho_inf=rho_inf,
+                         newton_tol=newton_tol, fixed_steps=fixed_steps)
+    return stepper, stepper.step_size(dt, span)
+
+
+def _note_initial_projection(rep, t0):
+    warnings.warn(ModelNote(
+        f"the initial state at t = {t0:g} violates the constraints (positions by "
+        f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
+        f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
+        f"{rep['velocity']:.3g} (as Exudyn's implicit solver does in its first step). Make the "
+        "initial state consistent to silence this note."), stacklevel=5)
+
+
+class Simulation:
+    """A model on a method, set up once (see the module docstring). Options as
+    :func:`~lgt_bridge.simulate`; ``t_end``: the end of the run, when known (adaptive
+    methods with dense output then step freely up to it); ``fixed_steps``: an adaptive pair
+    runs fixed steps of ``dt`` with its own tableau; ``min_step`` (> 0): an error-controlled
+    step shrinking below it ends the run, with ``min_step_why`` as the advice.
+
+    State: ``t``, ``q``, ``V``; counters ``n_steps``, ``n_redone``; ``initial_projection``
+    (how far the initial state was moved onto the constraints; None: it was consistent)."""
+
+    #: redos of one short step when the model's discontinuous states keep changing
+    MAX_DISCONTINUOUS = 5
+
+    def __init__(self, model, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
+                 atol=1e-8, t0=0.0, t_end=None, q0=None, V0=None, max_steps=1_000_000, project=True,
+                 rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, checked=False):
+        if not checked:
+            check_options(method, dt, rtol, atol, max_steps)
+            q0, V0 = check_state(model, q0, V0)
+            if t_end is not None and not float(t_end) > float(t0):
+                raise InputError(f"t_end = {t_end} must be greater than t0 = {t0}.")
+        q0 = model.q0 if q0 is None else q0
+        V0 = model.V0 if V0 is None else V0
+        self.method, self.choice = method, None
+        if _auto.wants_auto(group, chart):
+            self.choice = _auto.choose(model, group, chart, method=method, project=project)
+            group, chart = self.choice.groups, self.choice.charts
+        self.group, self.chart = group, chart
+        span = (float(t0), float(t_end)) if t_end is not None else None
+        stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
+                                   project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=span,
+                                   fixed_steps=fixed_steps)
+        self._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, project)
+        if min_step > 0:
+            stepper.min_step = min_step
+        self.min_step = min_step if stepper.adaptive else 0.0
+        self.min_step_name, self.min_step_why = "min_step", ""
+
+    @classmethod
+    def from_stepper(cls, model, stepper, dt, t0, q0, V0, max_steps=1_000_000, t_end=None,
+                     consistent=True):
+        """A simulation driving a stepper built by hand (tests, custom tableaux)."""
+        sim = cls.__new__(cls)
+        sim.method, sim.choice, sim.group, sim.chart = type(stepper).__name__, None, "", ""
+        sim.min_step, sim.min_step_name, sim.min_step_why = 0.0, "min_step", ""
+        sim._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent)
+        return sim
+
+    def _setup(self, model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent):
+        self.model, self.stepper = model, stepper
+        self._post = getattr(model, "post_step", None)
+        self.dt, self.t, self.max_steps = dt, float(t0), max_steps
+        self.t_end = t_end
+        self.dense = stepper.dense_capable and t_end is not None
+        self.n_steps = 0
+        self.n_redone = 0
+        span = (t_end - self.t) if t_end is not None else (dt or 1.0) * 1e2
+        self.h_event = 1e-7 * max(span, 1e-300)     # switches of discontinuous states located to this
+        self.initial_projection = None
+        if consistent and model.n_constraints:
+            own = getattr(model, "project_initial", None)     # an engine's own rule, if it has one
+            q0, V0, self.initial_projection = (own or partial(project_initial, model))(q0, V0, self.t)
+            if self.initial_projection is not None:
+                model.write_back(q0, V0, self.t)
+                _note_initial_projection(self.initial_projection, self.t)
+        stepper.set_state(q0, V0)
+        self.h = dt if dt is not None else stepper.initial_step(self.t)
+        self.first_step = self.h
+        self.wall_s = 0.0
+
+    # --- state ------------------------------------------------------------------------
+    @property
+    def q(self):
+        return self.stepper.q
+
+    @property
+    def V(self):
+        return self.stepper.V
+
+    def restart(self):
+        """Forget what the stepper carries from step to step (FSAL stages, Newton state):
+        the model changed between steps (an engine's pre-step user function)."""
+        st = self.stepper
+        st.set_state(st.q, st.V)
+
+    def stats(self):
+        """Counters of the run so far."""
+        st = self.stepper
+        out = dict(n_steps=self.n_steps, n_f=st.prob.n_f, n_rejected=st.n_rejected,
+                   n_newton=st.n_newton, wall_s=self.wall_s)
+        if st.projector is not None:
+            p = st.projector
+            out.update(constraint_before_projection=p.max_before, constraint_after_projection=p.max_after,
+                       velocity_constraint_after_projection=p.max_vel_after,
+                       projection_iterations=p.iterations)
+        if st.n_jacobians:
+            out["n_jacobians"] = st.n_jacobians
+        if self.initial_projection is not None:
+            out["initial_projection"] = self.initial_projection
+        if self.choice is not None:
+            out["auto"] = self.choice.as_dicts()
+        return out
+
+    # --- stepping ---------------------------------------------------------------------
+    def _step(self, target, on_step):
+        st = self.stepper
+        if self.n_steps >= self.max_steps:
+            raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
+        h_before = self.h
+        h_try = min(self.h, target - self.t)
+        hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
+        if hit:
+            h_try = target - self.t
+        post = self._post
+        try:
+            if post is None:
+                accepted, h_new = st.attempt(self.t, h_try)
+            else:
+                accepted, h_new = self._attempt_discontinuous(h_try, post)
+        except ModelError as exc:           # the engine raised: end the run, keep the steps
+            raise StepFailed(str(exc), error=ModelError) from exc
+        if accepted:
+            self.n_steps += 1
+            self.t = target if hit else self.t + h_try
+            self.model.write_back(st.q, st.V, self.t)
+            if st.adaptive:
+                self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
+            else:
+                self.h = min(h_new, self.dt) if h_new is not None else self.dt
+            if on_step is not None:
+                on_step(self.t, st.q, st.V)
+        else:
+            self.h = h_new
+            if self.h < 1e-14 * max(1.0, abs(self.t)):
+                raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+        if (self.h < self.min_step and self.h < h_before
+                and self.t < target - 1e-12 * max(1.0, abs(target))):
+            raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
+                             f"{self.min_step_name} = {self.min_step:g}: " + self.min_step_why)
+
+    def _attempt_discontinuous(self, h, post):
+        """A step of a model with discontinuous states (contact, friction: the model's
+        ``post_step(q, V, t)`` updates them from the step's end state and says whether they
+        changed). A step over which they change is declined and retried at a quarter of its
+        length, from its start and with the states of its start, until it is no longer than
+        ``h_event``; that short step is then redone with the new states (as Exudyn's
+        discontinuous iteration redoes its Newton step), up to MAX_DISCONTINUOUS times."""
+        st, m = self.stepper, self.model
+        snap, d0 = st.snapshot(), m.discontinuous_state()
+        accepted, h_new = st.attempt(self.t, h)
+        for _ in range(self.MAX_DISCONTINUOUS):
+            if not accepted or not post(st.q, st.V, self.t + h):
+                break
+            st.restore(snap)
+            if h > self.h_event:
+                m.set_discontinuous_state(d0)
+                return False, 0.25 * h
+            self.n_redone += 1
+            accepted, h_new = st.attempt(self.t, h)
+        return accepted, h_new
+
+    def advance_to(self, target, on_step=None):
+        """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated
+        within the last step when the method has dense output). A failed step raises
+        :class:`~.integrators.base.StepFailed` with the model at the last good step."""
+        st = self.stepper
+        if not self.dense:
+            while self.t < target:
+                self._step(target, on_step)
+            return st.q, st.V
+        tol = 1e-12 * max(1.0, abs(target))
+        while self.t < target - tol:
+            self._step(self.t_end, on_step)
+        if abs(self.t - target) <= tol or st.dense is None:
+            return st.q, st.V
+        return st.dense(target)
+
+    def run(self, t_end, t_eval=None, progress=None):
+        """Advance from the current time to ``t_end``, collecting the state at every step
+        (``t_eval`` None; the start included) or at ``t_eval``; returns a
+        :class:`~.result.SimulationResult` of this stretch. A failed step ends it with
+        ``success=False`` (every step before it kept, the model at the last good state); a
+        fixed-step chart overrun raises ChartDomainError with the result as ``.result``."""
+        t0, t1 = self.t, float(t_end)
+        if not t1 > t0:
+            raise InputError(f"t_end = {t1} must be greater than the simulation's time t = {t0}.")
+        t_eval = check_t_eval(t_eval, t0, t1)
+        st = self.stepper
+        self.t_end = t1
+        self.dense = st.dense_capable
+        wall0 = time.perf_counter()
+        n_steps0 = self.n_steps
+        ts, qs, Vs = [], [], []
+        record_all = t_eval is None
+        targets = [t1] if record_all else [t for t in t_eval if t > t0]
+        if record_all or t_eval[0] == t0:
+            ts.append(t0), qs.append(st.q.copy()), Vs.append(st.V.copy())
+        bar = simulation_bar(progress, t0, t1, self, st)
+
+        def on_step(t, q, V):
+            if record_all:
+                ts.append(t), qs.append(q.copy()), Vs.append(V.copy())
+            bar.step()
+
+        success, message = True, "reached the end of t_span"
+        try:
+            for target in targets:
+                q_out, V_out = self.advance_to(target, on_step)
+                if not record_all:
+                    ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
+            if self.t < t1:
+                self.advance_to(t1, on_step)
+        except StepFailed as exc:
+            self.model.write_back(st.q, st.V, self.t)
+            bar.close()
+            if exc.error is ChartDomainError:
+                err = ChartDomainError(str(exc))
+                err.result = self._result(ts, qs, Vs, False, str(exc), wall0, n_steps0)
+                raise err from None
+            success, message = False, str(exc)
+        bar.close()
+        return self._result(ts, qs, Vs, success, message, wall0, n_steps0)
+
+    def _result(self, ts, qs, Vs, success, message, wall0, n_steps0):
+        wall = time.perf_counter() - wall0
+        self.wall_s += wall
+        stats = self.stats()
+        stats.update(n_steps=self.n_steps - n_steps0, wall_s=wall)
+        model = self.model
+        if self.stepper.projector is None and model.n_constraints and qs:
+            rows = model.position_rows
+            stats["constraint_residual"] = float(max(
+                (np.abs(model.constraints_at(q, t)[rows]).max() if len(rows) else 0.0)
+                for t, q in zip(ts, qs)))
+        nq, nv = model.layout.nq, model.layout.nv
+        return SimulationResult(np.array(ts), np.array(qs).reshape(-1, nq), np.array(Vs).reshape(-1, nv),
+                                success, message, stats, self.method, self.group, self.chart)
+
+
+__all__ = ["Simulation", "SimulationResult", "make_stepper"]
