@@ -1,5 +1,5 @@
 """The compiled kernels against the numpy reference backend: every parameterization,
-both groups, both charts, rotation-only bodies, vector-space blocks and per-body mixes,
+both groups, every chart, rotation-only bodies, vector-space blocks and per-body mixes,
 at the level of one stage and of whole runs (agreement to 1e-13, relative to scale)."""
 import numpy as np
 import pytest
@@ -63,12 +63,12 @@ def _problems(model, groups, charts):
 
 
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3", "mix"])
-@pytest.mark.parametrize("chart", ["exp", "cay", "mix"])
+@pytest.mark.parametrize("chart", ["exp", "cay", "cay2", "mix"])
 def test_stage_kernels_equal_numpy(group, chart, rng):
     m = Mixed(rng)
     nb = m.layout.nbodies
     g = [("SE3", "SO3xR3")[k % 2] for k in range(nb)] if group == "mix" else group
-    c = [("exp", "cay")[(k // 2) % 2] for k in range(nb)] if chart == "mix" else chart
+    c = [("exp", "cay", "cay2")[(k // 2) % 3] for k in range(nb)] if chart == "mix" else chart
     ref, comp = _problems(m, g, c)
     for prob in (ref, comp):
         prob.start(m.q0)
@@ -157,7 +157,7 @@ def test_runs_agree_across_backends(monkeypatch, method, kw, param):
     """Constrained heavy top (projection), mixed groups and charts per body."""
     def make():
         return scenes.top_and_free_bodies(2, param=param)
-    groups, charts = ["SE3", "SO3xR3", "SE3"], ["exp", "cay", "cay"]
+    groups, charts = ["SE3", "SO3xR3", "SE3"], ["exp", "cay", "cay2"]
     out = [_run(monkeypatch, b, make, t_span=(0, 0.05), method=method, group=groups, chart=charts,
                 t_eval=[0.0, 0.02, 0.05], **kw) for b in ("numpy", "numba")]
     assert out[0].success and out[1].success

@@ -160,7 +160,7 @@ def fd_jacobian(ga, Wd1, lam, t1, rel=1e-2):
 
 
 # --- the matrix against its defining identity -------------------------------------------
-@pytest.mark.parametrize("group,chart", GROUPS_CHARTS)
+@pytest.mark.parametrize("group,chart", GROUPS_CHARTS + [("SE3", "cay2"), ("SO3xR3", "cay2")])
 @pytest.mark.parametrize("case", list(CASES))
 def test_iteration_matrix_is_the_jacobian_of_the_residual(case, group, chart):
     m = CASES[case]()

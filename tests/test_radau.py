@@ -90,7 +90,7 @@ def _jacobians(model, group, chart, t=0.1):
 
 
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
-@pytest.mark.parametrize("chart", ["exp", "cay"])
+@pytest.mark.parametrize("chart", ["exp", "cay", "cay2"])
 @pytest.mark.parametrize("make", [lambda: scenes.free_bodies(3, seed=1), lambda: scenes.heavy_top(param="rotvec"),
                                   lambda: scenes.chain(3)], ids=["free_bodies", "pivoted_top", "chain"])
 def test_model_jacobian_equals_differences_of_F(group, chart, make):
