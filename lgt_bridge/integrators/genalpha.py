@@ -133,19 +133,9 @@ class GenAlpha(Stepper):
         c = self._consts
         if c is None or c.h != h:
             k, g, b = self._k, self.gamma, self.beta
-            if self.prob.compiled:                  # one kernel call instead of ~10 numpy operations
-                from ..kernels.stage import ga_affine
-                n, nX = len(self.W), len(self._to_local)
-                a0, Wa, dXa, sp = np.empty(n), np.empty(n), np.empty(nX), np.empty(nX)
-                ga_affine(self.W, self.Wd, self.a, self.af, self.am, h, g, b, k, self.prob.chart_scale,
-                          self._to_local, a0, Wa, dXa, sp)
-                c = self._consts = _Affine(h, a0, Wa, dXa, k, h * g * k, sp)
-                return c
-            a0 = (self.af * self.Wd - self.am * self.a) / (1 - self.am)
-            d0 = h * self.W + h * h * (0.5 - b) * self.a + h * h * b * a0
-            scale = self.prob.chart_scale
-            c = self._consts = _Affine(h, a0, self.W + h * (1 - g) * self.a + h * g * a0,
-                                       scale * d0[self._to_local], k, h * g * k, h * h * b * k * scale)
+            a0, Wa, dXa, sp = self.prob.ga_affine(self.W, self.Wd, self.a, self.af, self.am, h, g, b, k,
+                                                  self._to_local)
+            c = self._consts = _Affine(h, a0, Wa, dXa, k, h * g * k, sp)
         return c
 
     def _state(self, Wd1, h):

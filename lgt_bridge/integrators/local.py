@@ -283,6 +283,29 @@ class LocalProblem:
         q, quats = self.configuration(dXa + sp * Wd[to_local])
         return q, self.model_velocity(W, quats), quats, W
 
+    def ga_affine(self, W, Wd, a, af, am, h, g, b, k, to_local):
+        """Generalized-α's step constants (a0, Wa, dXa, sp): a0 = (α_f Ẇ - α_m a)/(1 - α_m),
+        Wa = W + h(1 - γ) a + hγ a0, dXa = S (hW + h²(½ - β) a + h²β a0)[to_local],
+        sp = h²βk S (S: the chart scale)."""
+        a0 = (af * Wd - am * a) / (1 - am)
+        d0 = h * W + h * h * (0.5 - b) * a + h * h * b * a0
+        scale = self.chart_scale
+        return a0, W + h * (1 - g) * a + h * g * a0, scale * d0[to_local], h * h * b * k * scale
+
+    def error_sums(self, KX, KW, e5, e3, X1, W1, W0, rtol, atol):
+        """Σ (Σ_i e5_i K_i / sc)² and the same with e3 over y = (X, W), sc = atol +
+        rtol·max(|y_k|, |y_{k+1}|) (X_k = 0): the embedded pairs' error sums."""
+        ns = len(e5)
+        sc = np.concatenate([atol + rtol * np.abs(X1), atol + rtol * np.maximum(np.abs(W0), np.abs(W1))])
+        err5 = np.concatenate([e5 @ KX[:ns], e5 @ KW[:ns]]) / sc
+        err3 = np.concatenate([e3 @ KX[:ns], e3 @ KW[:ns]]) / sc
+        return float(err5 @ err5), float(err3 @ err3)
+
+    def quiet(self):
+        """A context in which the library's own arithmetic on a diverging step does not warn
+        (non-finite values are reported as StepError naming the body instead)."""
+        return np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore")
+
     def ga_residual(self, Vd, Wd, r, W, quats):
         """r = Ẇ - Ẇ(V̇) (in place); returns Σ r² (not finite when r is not)."""
         r[:] = Wd - self.group_acceleration(np.asarray(Vd, dtype=float), W, quats)

@@ -53,9 +53,7 @@ class ExplicitRK(Stepper):
         the step is reported; those floating-point warnings are silenced inside the step,
         and non-finite values are reported as StepError naming the body (the compiled
         kernels never warn, so the compiled path pays nothing for this)."""
-        if self.prob.compiled:
-            return self._attempt(t, h)
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        with self.prob.quiet():
             return self._attempt(t, h)
 
     def stages(self, t, h):
@@ -124,7 +122,7 @@ class AdaptiveRK(ExplicitRK):
         self.dense = None                      # DenseStep of the last accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
-        self._errsums = _error_sums_kernel() if problem.compiled else _error_sums
+        self._errsums = problem.error_sums
 
     def initial_step(self, t):
         """The starting step (:func:`.control.initial_step`)."""
@@ -182,20 +180,6 @@ class AdaptiveRK(ExplicitRK):
             return True, h_new
         self.n_rejected += 1
         return False, h * self.control.rejected(en)
-
-
-def _error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
-    """numpy reference of kernels.stage.error_sums."""
-    ns = len(e5)
-    sc = np.concatenate([atol + rtol * np.abs(X1), atol + rtol * np.maximum(np.abs(W0), np.abs(W1))])
-    err5 = np.concatenate([e5 @ KX[:ns], e5 @ KW[:ns]]) / sc
-    err3 = np.concatenate([e3 @ KX[:ns], e3 @ KW[:ns]]) / sc
-    return float(err5 @ err5), float(err3 @ err3)
-
-
-def _error_sums_kernel():
-    from ..kernels.stage import error_sums
-    return error_sums
 
 
 class DenseStep:
