@@ -289,7 +289,9 @@ class PinocchioModel(Model):
         self._move_zyx = _lgt.RotationLGT(params.RZYX, "exp")
         self._setup_constraints(constraints or [], fext)
         if self.compiled:
-            self._kW, self._kv = _kernels().pack(self.roots, self.nv, self.planars, self.zyx)
+            K = _kernels()
+            self._jt = K.joint_table(self.roots, self.planars, self.zyx)
+            self._kW, self._kv = K.work_array(self._jt, self.nv)
             self.f = self._f_compiled = self._build_f()
         # validate the inputs once now, so a wrong tau or fext fails before any step
         self._torques(0.0, q0, v0)
@@ -351,7 +353,7 @@ class PinocchioModel(Model):
         q = np.ascontiguousarray(q, dtype=np.float64)
         V = np.ascontiguousarray(V, dtype=np.float64)
         W = self._kW.copy()
-        (_K or _kernels()).v_from_twist(q, V, W)
+        (_K or _kernels()).v_from_twist(q, V, self._jt, W)
         return W[self._kv].copy()
 
     def _v_from_twist_numpy(self, q, V):
@@ -810,7 +812,7 @@ class PinocchioModel(Model):
         K = _kernels()
         v_from_twist, vdot_from_a = K.v_from_twist, K.vdot_from_a_unchecked
         pin, model, data = self.pin, self.model, self.data
-        W = self._kW
+        jt, W = self._jt, self._kW
         v_buf = W[self._kv]
         has_roots = self._convert
         tau_c = np.zeros(self.nv) if self._tau is None else self._tau
@@ -837,11 +839,11 @@ class PinocchioModel(Model):
         def f(q, V, t):
             if has_roots:
                 try:
-                    v_from_twist(q, V, W)
+                    v_from_twist(q, V, jt, W)
                 except (TypeError, ValueError):        # not float64 C-contiguous, or the wrong size
                     q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
                     check_sizes(q, V)
-                    v_from_twist(q, V, W)
+                    v_from_twist(q, V, jt, W)
                 v = v_buf
             else:
                 if type(q) is not ndarray or q.dtype is not F64:
@@ -858,7 +860,7 @@ class PinocchioModel(Model):
                     tau = checked_tau(tau)
             a = aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
             if has_roots:
-                vdot_from_a(W, a)                      # in place (W and a: float64 vectors)
+                vdot_from_a(jt, W, a)                  # in place (jt: int64 table; W, a: float64 vectors)
             return a
 
         f.__doc__ = PinocchioModel.f.__doc__
