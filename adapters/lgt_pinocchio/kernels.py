@@ -22,8 +22,8 @@ neither q nor v as arguments.
   on roots, (R (a_xy + ω J v_xy), a_ω) on planar joints (J v = (-v_y, v_x)) and
   ω̇ = G a + Ġ θ̇ on ZYX joints.
 
-The numpy reference is ``PinocchioModel._v_from_twist_numpy`` / ``_f_numpy``; tests hold them
-equal (1e-13). Plain loops: ``NUMBA_DISABLE_JIT=1`` runs the
+The numpy reference is :class:`lgt_pinocchio.joints.Joints` (``v_from_twist``,
+``vdot_from_a``); tests hold them equal (1e-13). Plain loops: ``NUMBA_DISABLE_JIT=1`` runs the
 same source interpreted.
 """
 import math
