@@ -49,9 +49,6 @@ def build_f(m, kernels):
     tau_call = callable(tau_c)
     nv_shape = (m.nv,)
     checked_tau, forces = m.loads.checked_tau, m.loads.forces
-
-    def check(q, V):
-        check_sizes(m, q, V)
     ndarray, F64, contiguous = np.ndarray, _F64, np.ascontiguousarray
     if m.n_constraints:
         cms, cds, prox = m.cons.cms, m.cons.cds, m.cons.prox
@@ -74,7 +71,7 @@ def build_f(m, kernels):
                 v_from_twist(q, V, jt, W)
             except (TypeError, ValueError):        # not float64 C-contiguous, or the wrong size
                 q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
-                check(q, V)
+                check_sizes(m, q, V)
                 v_from_twist(q, V, jt, W)
             v = v_buf
         else:
@@ -83,7 +80,7 @@ def build_f(m, kernels):
             if type(V) is not ndarray or V.dtype is not F64:
                 V = contiguous(V, dtype=F64)
             if V.shape != nv_shape:
-                check(q, V)
+                check_sizes(m, q, V)
             v = V                                  # the same in both coordinates
         tau = tau_c
         if tau_call:
