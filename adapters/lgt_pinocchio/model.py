@@ -137,8 +137,7 @@ class PinocchioModel(Model):
         :func:`lgt_bridge.simulate.simulate` before the first step."""
         from lgt_bridge.validation import mass_defects
         q = np.asarray(q, float)
-        M = self.pin.crba(self.model, self.data, q)
-        M = np.triu(M) + np.triu(M, 1).T
+        M = self._crba(q)
         A = None
         if self.n_constraints:
             # A is with respect to V; v = T V, so with respect to v it is A T⁻¹
@@ -197,10 +196,13 @@ class PinocchioModel(Model):
 
     def mass_matrix(self, q):
         """M̄ = Tᵀ M T in twist coordinates (Pinocchio's CRBA, symmetrized)."""
-        M = self.pin.crba(self.model, self.data, q)
-        M = np.triu(M) + np.triu(M, 1).T
         T = self.joints.T(q)
-        return T.T @ M @ T
+        return T.T @ self._crba(q) @ T
+
+    def _crba(self, q):
+        """Pinocchio's joint-space mass matrix at q (CRBA fills the upper triangle only)."""
+        M = self.pin.crba(self.model, self.data, q)
+        return np.triu(M) + np.triu(M, 1).T
 
     def forces(self, q, V, t):
         """Q̄ with M̄ V̇ = Q̄ (+ constraint forces): Tᵀ (τ - rnea(q, v, 0, fext) - M Ṫ V), where
@@ -213,9 +215,7 @@ class PinocchioModel(Model):
             b = pin.rnea(self.model, self.data, q, v, z)
         else:
             b = pin.rnea(self.model, self.data, q, v, z, self.loads.forces(t, q, v))
-        M = pin.crba(self.model, self.data, q)
-        M = np.triu(M) + np.triu(M, 1).T
-        return self.joints.T(q).T @ (tau - b - M @ self.joints.TdV(v, q))
+        return self.joints.T(q).T @ (tau - b - self._crba(q) @ self.joints.TdV(v, q))
 
     def constraints(self, q):
         return self.cons.residual(q)
