@@ -1,0 +1,95 @@
+"""f(q, V, t) of a :class:`lgt_pinocchio.PinocchioModel` on either backend: one Pinocchio ABA
+(constraintDynamics with constraints) between the V -> v and a -> V̇ conversions.
+
+* :func:`f_numpy`: the readable reference, on :class:`lgt_pinocchio.joints.Joints`;
+* :func:`build_f`: the compiled backend's f, a closure over the model's constants (no attribute
+  look-ups per call) around two kernel calls (:mod:`lgt_pinocchio.kernels`) over the model's
+  preallocated work array.
+"""
+import numpy as np
+
+from lgt_bridge.errors import InputError
+
+_F64 = np.dtype(np.float64)
+
+
+def check_sizes(m, q, V):
+    """InputError unless q and V have the model's sizes."""
+    if np.shape(q) != (m.nq,) or np.shape(V) != (m.nv,):
+        raise InputError(f"PinocchioModel.f: q has shape {np.shape(q)} and V {np.shape(V)}; this model needs "
+                         f"q of shape ({m.nq},) and V of shape ({m.nv},) (the twist layout of "
+                         "model.layout).")
+
+
+def f_numpy(m, q, V, t):
+    """f on the numpy backend (a new array)."""
+    check_sizes(m, q, V)
+    pin = m.pin
+    v = m.joints.v_from_twist(q, V)
+    tau = m.loads.torques(t, q, v)
+    if m.n_constraints:
+        a = m.cons.dynamics(q, v, tau)
+    elif m.loads.fext is None:
+        a = pin.aba(m.model, m.data, q, v, tau)
+    else:
+        a = pin.aba(m.model, m.data, q, v, tau, m.loads.forces(t, q, v))
+    return m.joints.vdot_from_a(q, v, a)
+
+
+def build_f(m, kernels):
+    """The compiled-backend f of model ``m``: V -> v by one kernel call into the work array,
+    Pinocchio, then a -> V̇ in place by a second (ABA's a is a new array, so it is returned as
+    V̇)."""
+    v_from_twist, vdot_from_a = kernels.v_from_twist, kernels.vdot_from_a_unchecked
+    pin, model, data = m.pin, m.model, m.data
+    jt, W = m._jt, m._kW
+    v_buf = W[m._kv]
+    has_roots = m.joints.convert
+    tau_c = np.zeros(m.nv) if m.loads.tau is None else m.loads.tau
+    tau_call = callable(tau_c)
+    nv_shape = (m.nv,)
+    checked_tau, forces = m.loads.checked_tau, m.loads.forces
+    ndarray, F64, contiguous = np.ndarray, _F64, np.ascontiguousarray
+    if m.n_constraints:
+        cms, cds, prox = m.cons.cms, m.cons.cds, m.cons.prox
+        dynamics = pin.constraintDynamics
+
+        def engine(q, v, tau, t):
+            return dynamics(model, data, q, v, tau, cms, cds, prox)
+    elif m.loads.fext is not None:
+        aba = pin.aba
+
+        def engine(q, v, tau, t):
+            return aba(model, data, q, v, tau, forces(t, q, v))
+    else:
+        engine = None
+        aba = pin.aba
+
+    def f(q, V, t):
+        if has_roots:
+            try:
+                v_from_twist(q, V, jt, W)
+            except (TypeError, ValueError):        # not float64 C-contiguous, or the wrong size
+                q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
+                check_sizes(m, q, V)
+                v_from_twist(q, V, jt, W)
+            v = v_buf
+        else:
+            if type(q) is not ndarray or q.dtype is not F64:
+                q = contiguous(q, dtype=F64)
+            if type(V) is not ndarray or V.dtype is not F64:
+                V = contiguous(V, dtype=F64)
+            if V.shape != nv_shape:
+                check_sizes(m, q, V)
+            v = V                                  # the same in both coordinates
+        tau = tau_c
+        if tau_call:
+            tau = tau(t, q, v)
+            if type(tau) is not ndarray or tau.dtype is not F64 or tau.shape != nv_shape:
+                tau = checked_tau(tau)
+        a = aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
+        if has_roots:
+            vdot_from_a(jt, W, a)                  # in place (jt, W and a: int64 / float64 arrays)
+        return a
+
+    return f
