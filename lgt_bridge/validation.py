@@ -113,8 +113,10 @@ def mass_defects(M, A=None, rtol=None):
     The test is scale-free: M is scaled symmetrically by its diagonal (so kilograms and
     kg m² compare), a zero or negative diagonal entry is a defect of its own index, and an
     eigenvalue of the scaled matrix below ``rtol`` (default max(1e-12, 100 n eps)) is a
-    defect named by the largest entry of its eigenvector. Independent diagonal blocks
-    (the block-diagonal M of free bodies) are checked block by block."""
+    defect named by the largest entry of its eigenvector. The test is a Cholesky factorization
+    of the scaled matrix less rtol·I (cheap); the eigen-decomposition runs only to name the
+    defects when it fails. Independent diagonal blocks (the block-diagonal M of free bodies)
+    are checked block by block."""
     M = np.asarray(M, float)
     n = len(M)
     if n == 0:
@@ -149,9 +151,15 @@ def mass_defects(M, A=None, rtol=None):
     by_size = {}
     for idx in _diagonal_blocks(S):
         by_size.setdefault(len(idx), []).append(idx)
-    for group in by_size.values():                 # same-size blocks in one batched eigh
+    for group in by_size.values():                 # same-size blocks in one batched call
         I = np.array(group)
-        w, U = np.linalg.eigh(S[I[:, :, None], I[:, None, :]])
+        B = S[I[:, :, None], I[:, None, :]]
+        try:                                       # every eigenvalue > rtol: Cholesky of B - rtol I
+            np.linalg.cholesky(B - rtol * np.eye(B.shape[1]))
+            continue
+        except np.linalg.LinAlgError:              # name the defect: the eigen-decomposition
+            pass
+        w, U = np.linalg.eigh(B)
         for b, k in zip(*np.nonzero(w <= rtol)):
             out.append((int(I[b][np.argmax(np.abs(U[b][:, k]))]), float(w[b, k])))
     return sorted(out)
