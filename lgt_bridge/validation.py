@@ -65,8 +65,14 @@ def check_state(model, q0=None, V0=None):
             i = int(np.flatnonzero(~np.isfinite(arr))[0])
             raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                              "give a finite initial state.")
-    validate_bodies(lay, q0)
-    check_mass(model, q0)
+    # the bodies' coordinates and the mass matrix at q0: checked once per model and q0 (a
+    # model's structure does not change; repeated runs from one state skip the checks)
+    memo = getattr(model, "__dict__", {})
+    key = q0.tobytes()
+    if memo.get("_lgt_checked_q0") != key:
+        validate_bodies(lay, q0)
+        check_mass(model, q0)
+        memo["_lgt_checked_q0"] = key
     return q0, V0
 
 
