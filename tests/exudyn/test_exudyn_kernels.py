@@ -241,7 +241,7 @@ def test_interpreted_kernels_give_the_same_f():
     """NUMBA_DISABLE_JIT=1 runs the same source as plain Python."""
     code = (
         "import sys, numpy as np\n"
-        "sys.path[:0] = ['tests', 'adapters']\n"
+        "sys.path[:0] = ['tests/models', 'adapters']\n"
         "import exudyn_models as em\n"
         "from lgt_exudyn.model import ExudynModel\n"
         "from lgt_exudyn import kernels as K\n"
@@ -251,7 +251,7 @@ def test_interpreted_kernels_give_the_same_f():
         "    a, b = K.f_compiled(m, P, q, V, 0.2), m.f(q, V, 0.2)\n"
         "    print(np.abs(a - b).max() / np.abs(b).max())\n")
     import os
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     out = run_python(f"import os; os.chdir({root!r})\n" + code, NUMBA_DISABLE_JIT="1")
     errs = [float(x) for x in out.split()]
     assert len(errs) == 2 and max(errs) < 1e-9

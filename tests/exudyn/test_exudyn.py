@@ -175,7 +175,7 @@ def test_drop_in_sensors_and_solution_file_as_exudyn_writes_them(tmp_path):
 
 
 def test_lgt_bridge_run_routes_a_legacy_script():
-    script = HERE / "legacy" / "exudyn_pendulum.py"
+    script = HERE.parent / "models" / "legacy" / "exudyn_pendulum.py"
     native = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, check=True)
     routed = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "rkmk4"],
                             capture_output=True, text=True, check=True)
