@@ -76,10 +76,11 @@ def components(Mb):
 
 
 def _rows(rows):
-    """An int64 section of T (-1 where a row is shorter than the table)."""
+    """An int64 section of T from rows of one length (-1 in the columns they do not use)."""
     t = np.full((len(rows), NCOL), -1, np.int64)
-    for k, r in enumerate(rows):
-        t[k, :len(r)] = r
+    if len(rows):
+        rows = np.asarray(rows, np.int64).reshape(len(rows), -1)
+        t[:, :rows.shape[1]] = rows
     return t
 
 
