@@ -72,7 +72,8 @@ def f_compiled(model, P, q, V, t):
     P = pack(model) (nc_max = model.n_constraints, Exudyn's views); q, V float64
     C-contiguous. The two γ evaluations come first and the state itself last, so that the
     system ends at (q, V, t) after three writes instead of four."""
-    S, mbs, sd, cons = model.solver, model.mbs, model.sd, model.cons
+    E, cons = model.engine, model.cons
+    S, mbs, sd = E.solver, E.mbs, E.sd
     T, off, w, qpos, qvel = P.T, P.off, P.w, P.qpos, P.qvel
     nc = model.n_constraints
     if nc:
@@ -102,8 +103,7 @@ def f_compiled(model, P, q, V, t):
     model.n_eval += 1
     if nc:
         A = P.A
-        constraint_matrix(T, off, w, q, model.engine.ae_jacobian_full(1.0, 1.0 if cons.velocity_rows else 0.0),
-                          P.rows, A)
+        constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.velocity_rows else 0.0), P.rows, A)
     else:
         A, gam = P.A0, P.gam0
     Vd = np.empty(P.nv)

@@ -43,7 +43,7 @@ class ExudynModel(Model):
                              "call mbs.Assemble() before wrapping it.")
         nodes = self.nodes = NodeLayout(mbs)
         engine = self.engine = Engine(mbs)
-        self.mbs, self.sd, self.solver = mbs, engine.sd, engine.solver
+        self.mbs = mbs
         self.n2, self.nv, self.kinds, self.ref = nodes.n2, nodes.nv, nodes.kinds, engine.ref
         self._jac_zero = engine.jac_zero
         #: the compiled kernels run this model's conversions (the backend is read here, once)
@@ -81,7 +81,25 @@ class ExudynModel(Model):
             # body): generalized-α differences the step instead
             self.iteration_matrix = None
 
-    # ------------------------------------------------------------------ the parts' maps
+    # ------------------------------------------------------------------ the parts' handles and maps
+    @property
+    def solver(self):
+        """The evaluator (the engine's; setting it, e.g. to a timing proxy, sets the engine's)."""
+        return self.engine.solver
+
+    @solver.setter
+    def solver(self, solver):
+        self.engine.solver = solver
+
+    @property
+    def sd(self):
+        """The system's data (the engine's; settable as ``solver``)."""
+        return self.engine.sd
+
+    @sd.setter
+    def sd(self, sd):
+        self.engine.sd = sd
+
     def H(self, q):
         """Dense H(q) (n2 x nv): q̇_e = H V."""
         return self.nodes.H(q)
