@@ -2,11 +2,13 @@
 
 Public for the adapters and for users who build their own loops: ``check_inputs``
 (t_span, method, tolerances, initial state), ``check_mass`` / ``mass_defects`` /
-``mass_message`` (a singular or indefinite mass matrix named by its body), and
-``validate_bodies`` (every body's coordinates, batched per parameterization).
+``mass_message`` (a singular or indefinite mass matrix named by its body),
+``validate_bodies`` (every body's coordinates, batched per parameterization), and
+``QUAT_NORM_TOL`` (how far a unit quaternion's norm may be from 1).
 """
 import numpy as np
 
+from ._checks import QUAT_NORM_TOL  # noqa: F401  (public here)
 from .errors import InputError
 from .integrators import registry as _methods
 
