@@ -239,9 +239,12 @@ class DenseStep:
 
 
 def _dop853_eval(F, x):
-    """Hairer's contd8 polynomial: y - y_0 at θ = x."""
-    y = np.zeros(F.shape[1])
-    for i, f in enumerate(F[::-1]):
-        y += f
-        y *= x if i % 2 == 0 else 1.0 - x
-    return y
+    """Hairer's contd8 polynomial: y - y_0 at θ = x, i.e. θ (F0 + (1-θ)(F1 + θ(F2 + (1-θ)(F3
+    + θ(F4 + (1-θ)(F5 + θ F6)))))) as one product with the weights of the rows."""
+    u = 1.0 - x
+    w1 = x * u
+    w2 = w1 * x
+    w3 = w2 * u
+    w4 = w3 * x
+    w5 = w4 * u
+    return np.array([x, w1, w2, w3, w4, w5, w5 * x]) @ F
