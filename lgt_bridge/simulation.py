@@ -217,7 +217,15 @@ class Simulation:
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated
         within the last step when the method has dense output). A failed step raises
-        :class:`~.integrators.base.StepFailed` with the model at the last good step."""
+        :class:`~.errors.StepError` (:class:`~.errors.ModelError` when the engine raised,
+        :class:`~.errors.ChartDomainError` for a fixed step beyond its chart's domain), the
+        stepper at the last good step (``q``, ``V``, ``t``)."""
+        try:
+            return self._advance_to(target, on_step)
+        except StepFailed as exc:
+            raise exc.error(str(exc)) from None
+
+    def _advance_to(self, target, on_step=None):
         st = self.stepper
         if not self.dense:
             while self.t < target:
@@ -260,11 +268,11 @@ class Simulation:
         success, message = True, "reached the end of t_span"
         try:
             for target in targets:
-                q_out, V_out = self.advance_to(target, on_step)
+                q_out, V_out = self._advance_to(target, on_step)
                 if not record_all:
                     ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
             if self.t < t1:
-                self.advance_to(t1, on_step)
+                self._advance_to(t1, on_step)
         except StepFailed as exc:
             self.model.write_back(st.q, st.V, self.t)
             bar.close()

@@ -10,9 +10,8 @@ needs, and interpolate Exudyn's output steps with their dense output.
 import sys
 import time
 
-from lgt_bridge.errors import InputError, StepError
+from lgt_bridge.errors import InputError, LGTError, StepError
 from lgt_bridge.integrators import registry
-from lgt_bridge.integrators.base import StepFailed
 from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
@@ -139,7 +138,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             sim.restart()
         try:
             q_out, V_out = sim.advance_to(ts + h, on_step)
-        except StepFailed as exc:
+        except LGTError as exc:           # a failed step: the simulation is at the last good one
             failure.append(str(exc))
             model.write_back(stepper.q, stepper.V, sim.t)
             solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
