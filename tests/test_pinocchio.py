@@ -214,12 +214,15 @@ def test_constraint_jacobian_matches_pinocchio_where_satisfied(rng):
     assert np.abs(AV[3:] - Jc[3:] @ v).max() < 1e-8 * max(1, np.abs(AV).max())
 
 
-def test_constraint_not_satisfied_at_q0_is_rejected():
+def test_constraint_to_the_default_world_anchor_holds_its_frame_at_q0():
+    """Pinocchio constrains the frame's acceleration: a constraint left at the default anchor
+    (joint 2 the world at the identity) keeps the frame where it is at q0 (issue 21; it was
+    refused as not satisfied at q0)."""
     model = free_body_model()
     cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, 1, pin.SE3(np.eye(3), np.array([0.5, 0, 0])),
                                   pin.LOCAL)
-    with pytest.raises(InputError, match="do not coincide"):
-        PinocchioModel(model, constraints=[cm])
+    pm = PinocchioModel(model, constraints=[cm])
+    assert pm.cons.anchored == [0] and np.abs(pm.constraints(pm.q0)).max() < 1e-15
 
 
 def test_mass_matrix_and_forces_reproduce_aba(rng):
