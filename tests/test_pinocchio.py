@@ -10,6 +10,7 @@ from lgt_bridge.analytic import torque_free_omega  # noqa: E402
 from lgt_bridge.scenes import RigidBodySystem  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_pinocchio import PinocchioModel  # noqa: E402
+from lgt_pinocchio.constraints import init_dynamics  # noqa: E402
 
 import references as ref  # noqa: E402
 from pinocchio_models import ball_chain  # noqa: E402
@@ -205,7 +206,7 @@ def test_constraint_jacobian_matches_pinocchio_where_satisfied(rng):
     cds = pin.StdVec_RigidConstraintData()
     cds.append(cm.createData())
     dd = model.createData()
-    pin.initConstraintDynamics(model, dd, cms, cds)
+    init_dynamics(pin, model, dd, cms, cds)                    # pin 3: three arguments, pin 4: four
     pin.constraintDynamics(model, dd, q0, v, np.zeros(model.nv), cms, cds, pin.ProximalSettings(1e-12, 1e-12, 20))
     Jc = pin.getConstraintsJacobian(model, dd, cms, cds)      # LOCAL frame of the contact
     Rc = (dd.oMi[j] * pl).rotation

@@ -123,6 +123,7 @@ class PinocchioModel(Model):
         self.V0 = self.twist_from_v(self.q0, v0)
         # write_back's watch of singular configurations: times, the passage under way, the last step
         self.branch_switches, self.singular_passages, self._branch, self._last = [], [], None, None
+        self._A_last = None
         self.cons = Constraints(pin, model, self.data, self.joints, constraints or [], self.q0, prox_settings)
         self.n_constraints = self.cons.n
         if self.n_constraints:
@@ -144,6 +145,7 @@ class PinocchioModel(Model):
             q = self._closed(self.q0, self.V0, 0.0)[0]
         self.cons.set_rows(independent_rows(self.cons.jacobian_all(q)))
         self.n_constraints = self.cons.n
+        self._A_last = None                      # the projection's A had every row
 
     def _closed(self, q0, V0, t0):
         """The core's projection of (q0, V0) onto the constraints (:func:`project_initial`), or
@@ -184,8 +186,9 @@ class PinocchioModel(Model):
         motion switched branch: ``branch_switches``) or stayed continuous (``singular_passages``)."""
         if not self.n_constraints:
             return
-        s = np.linalg.svd(self.constraint_jacobian(q), compute_uv=False)
-        ratio = s[-1] / max(s[0], 1e-300)
+        A = self.constraint_jacobian(q)
+        w = np.linalg.eigvalsh(A @ A.T)                          # σ² of A, ascending
+        ratio = np.sqrt(max(w[0], 0.0) / max(w[-1], 1e-300))
         z = self._branch
         q, V = np.array(q, float), np.array(V, float)        # the stepper's buffers: keep copies
         if z is None and not ratio < SINGULAR_TOL:
@@ -338,8 +341,12 @@ class PinocchioModel(Model):
 
     def constraint_jacobian(self, q):
         """A(q) = ∂g/∂V (ġ = A V) from Pinocchio's frame Jacobians
-        (:meth:`lgt_pinocchio.constraints.Constraints.jacobian`)."""
-        return self.cons.jacobian(q)
+        (:meth:`lgt_pinocchio.constraints.Constraints.jacobian`). The last one is kept: the
+        projection after a step ends with A at the step's q, which write_back reads again."""
+        key = np.asarray(q, float).tobytes()
+        if self._A_last is None or self._A_last[0] != key:
+            self._A_last = (key, self.cons.jacobian(q))
+        return self._A_last[1].copy()
 
     def constraint_gamma(self, q, V):
         """γ(q, V) = (d/dt A) V, so that g̈ = A V̇ + γ, from Pinocchio's frame accelerations
