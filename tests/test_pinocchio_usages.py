@@ -104,6 +104,13 @@ def test_the_installed_pinocchios_constraint_api():
     assert np.isfinite(pm.f(pm.q0, pm.V0, 0.0)).all()
 
 
+def test_pinocchio_2_is_refused_with_the_version_needed(monkeypatch):
+    m, q0 = manipulator()
+    monkeypatch.setattr(pin, "__version__", "2.7.0")
+    with pytest.raises(InputError, match=r"needs Pinocchio >= 3\.0; this is Pinocchio 2\.7\.0"):
+        PinocchioModel(m, q0=q0)
+
+
 # --- 2. Pinocchio 4's anchors, and the refused classes --------------------------------------------
 @needs_pin4
 @pytest.mark.parametrize("cls, kind", [("PointAnchorConstraintModel", C3), ("FrameAnchorConstraintModel", C6)])
@@ -151,6 +158,8 @@ def test_compliant_and_prescribed_anchors_are_refused():
         PinocchioModel(m, q0=q0, constraints=[a])
     with pytest.raises(InputError, match="RigidConstraintModel"):
         PinocchioModel(m, q0=q0, constraints=["contact"])
+    with pytest.raises(InputError, match="a list"):
+        PinocchioModel(m, q0=q0, constraints=3)
 
 
 # --- 3. contacts and loops as Pinocchio's examples build them ---------------------------------------
@@ -201,7 +210,7 @@ def test_users_proximal_settings_are_used():
     m, q0 = manipulator()
     cm = world_anchor(m, q0, m.nv, PL)
     prox = pin.ProximalSettings(1e-13, 1e-12, 7)
-    pm = PinocchioModel(m, q0=q0, constraints=[cm], prox_settings=prox)
+    pm = PinocchioModel(m, q0=q0, constraints=cm, prox_settings=prox)      # one, not in a list
     assert pm.prox is prox
     pm.f(pm.q0, pm.V0, 0.0)
     assert prox.iter >= 1                                # Pinocchio wrote its iterations there
@@ -249,6 +258,11 @@ def test_external_forces_with_constraints(backend):
     q, v = run(pm, T, method="dop853", rtol=1e-12, atol=1e-12)
     assert np.abs(qr - qn).max() > 1e-2                               # the forces matter
     assert np.abs(q - qr).max() < 1e-9 and np.abs(v - vr).max() < 1e-8
+    errs = []                                                         # index 3: forces() with fext
+    for dt in (4e-3, 2e-3):
+        q, v = run(pm, T, method="genalpha", dt=dt)
+        errs.append(np.abs(q - qr).max())
+    assert errs[1] < errs[0] < 1e-2 and errs[0] / errs[1] > 3
 
 
 def test_constraint_placements_are_copied_when_wrapped():

@@ -175,6 +175,13 @@ class Constraints:
         self.cms = pin.StdVec_RigidConstraintModel()
         self.cds = pin.StdVec_RigidConstraintData()
         self.names = []
+        if hasattr(constraints, "createData"):          # one constraint, not in a list
+            constraints = [constraints]
+        try:
+            constraints = list(constraints)
+        except TypeError:
+            raise InputError(f"constraints: expected a list of Pinocchio constraint models, got a "
+                             f"{type(constraints).__name__}.") from None
         for k, c in enumerate(constraints):
             cm = _rigid(pin, model, k, c)
             self.cms.append(cm)

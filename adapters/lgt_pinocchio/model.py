@@ -47,7 +47,25 @@ SINGULAR_TOL = 1e-3
 BRANCH_JUMP_TOL = 1e-3
 
 
+#: the oldest Pinocchio the adapter runs on (tested: 3.3.1, 3.9.0, 4.1.0)
+MIN_PIN = (3, 0)
+
+
+def _check_pin_version(pin):
+    """InputError on a Pinocchio older than MIN_PIN (2.x has other constraint classes and
+    constructors), before anything is built."""
+    version = getattr(pin, "__version__", "0")
+    try:
+        found = tuple(int(x) for x in version.split(".")[:2])
+    except ValueError:
+        return
+    if found < MIN_PIN:
+        raise InputError(f"lgt_pinocchio needs Pinocchio >= {'.'.join(map(str, MIN_PIN))}; this is Pinocchio "
+                         f"{version}. Upgrade it: pip install 'pin>=3' (or 'lgt-bridge[pinocchio]').")
+
+
 def _check_pin_model(pin, model):
+    _check_pin_version(pin)
     if isinstance(model, pin.Model):
         return
     if isinstance(model, pin.Data):
@@ -124,7 +142,8 @@ class PinocchioModel(Model):
         # write_back's watch of singular configurations: times, the passage under way, the last step
         self.branch_switches, self.singular_passages, self._branch, self._last = [], [], None, None
         self._A_last = None
-        self.cons = Constraints(pin, model, self.data, self.joints, constraints or [], self.q0, prox_settings)
+        self.cons = Constraints(pin, model, self.data, self.joints, [] if constraints is None else constraints,
+                                self.q0, prox_settings)
         self.n_constraints = self.cons.n
         if self.n_constraints:
             self._rank_constraints()
