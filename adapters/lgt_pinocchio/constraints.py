@@ -201,8 +201,8 @@ class Constraints:
         self.anchored = []
         if not self.n:
             return
-        # (constraint model, 6-D?, first row); the placements are read from Pinocchio's own
-        # vector at each call, as constraintDynamics reads them
+        # (constraint model, 6-D?, first row): the wrapped copies in cms (references into
+        # Pinocchio's vector), read at each call as constraintDynamics reads them
         self._rows, row = [], 0
         for cm in self.cms:
             six = cm.type == pin.ContactType.CONTACT_6D

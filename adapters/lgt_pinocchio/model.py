@@ -117,6 +117,9 @@ class PinocchioModel(Model):
     prox_settings: the ``pinocchio.ProximalSettings`` constraintDynamics uses (default:
     ``ProximalSettings(1e-12, 1e-12, 50)``: accuracy, mu, max_iter).
     q0, v0: initial state in Pinocchio's own coordinates (default: neutral, zero).
+    After a run: ``branch_switches`` and ``singular_passages``, the (start, end) times of the
+    passages near a singular configuration of the constraints in which the solution switched
+    assembly branch or stayed on it (each also a ModelNote; :meth:`write_back`).
     backend: 'numba' or 'numpy' (default: $LGT_BRIDGE_BACKEND, else numba).
 
     With the compiled backend, ``tau`` and ``fext`` receive the caller's q and the model's
@@ -193,6 +196,7 @@ class PinocchioModel(Model):
         as Pinocchio's examples start it; velocities onto A V = 0) by the core's projection;
         ``report`` None when it was consistent. InputError when the projection fails."""
         self._branch = self._last = None
+        self.branch_switches, self.singular_passages = [], []        # of this run
         return self._closed(q0, V0, t0)
 
     def write_back(self, q, V, t):
