@@ -133,7 +133,8 @@ def _rigid(pin, model, k, c):
     if set_:
         raise InputError(f"constraints[{k}] ({name}) has a nonzero {', '.join(set_)}: a prescribed motion "
                          "of the constraint, which the bridge does not take (its constraints make the two "
-                         "frames coincide); leave it at zero (identity), or move joint2_placement instead.")
+                         "frames coincide, with placements fixed when the model is wrapped); leave it at zero "
+                         "(identity), and put a constant offset into joint2_placement.")
     if not _is_zero(compliance):
         raise InputError(f"constraints[{k}] ({name}) has a compliance of {np.asarray(compliance).tolist()}: a "
                          "soft constraint, which the bridge does not take (its constraints hold exactly); "
