@@ -49,7 +49,8 @@ def _note_initial_projection(rep, t0):
         f"the initial state at t = {t0:g} violates the constraints (positions by "
         f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
         f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
-        f"{rep['velocity']:.3g} (as Exudyn's implicit solver does in its first step). Make the "
+        f"{rep['velocity']:.3g} (the model's own rule where it has one: Exudyn's first implicit step, "
+        "Pinocchio's loop closure). Make the "
         "initial state consistent to silence this note."), stacklevel=5)
 
 
