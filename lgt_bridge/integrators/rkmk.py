@@ -27,6 +27,22 @@ def build(method, problem, o):
     return AdaptiveRK(problem, tab, o["rtol"], o["atol"], o["projector"], first_step=o["dt"])
 
 
+_COEFFICIENTS = {}
+
+
+def _stage_coefficients(tableau):
+    """(rows of A as contiguous arrays, b, c as Python floats) of a tableau, made once per
+    tableau (a run's set-up is part of every call)."""
+    key = id(tableau)
+    got = _COEFFICIENTS.get(key)
+    if got is None or got[0] is not tableau:
+        if len(_COEFFICIENTS) > 64:          # tableaux made per call (fixed forms): keep it small
+            _COEFFICIENTS.clear()
+        got = _COEFFICIENTS[key] = (tableau, [np.ascontiguousarray(row, dtype=float) for row in tableau.A],
+                                    np.ascontiguousarray(tableau.b, dtype=float), [float(x) for x in tableau.c])
+    return got[1:]
+
+
 class ExplicitRK(Stepper):
 
     def __init__(self, problem, tableau, projector=None):
@@ -37,9 +53,7 @@ class ExplicitRK(Stepper):
         # dense output while the next step is attempted in the other set
         self._bufs = [(np.zeros((ns, problem.nX)), np.zeros((ns, problem.nv))) for _ in range(2)]
         self.KX, self.KW = self._bufs[0]
-        self._A = [np.ascontiguousarray(row, dtype=float) for row in tableau.A]
-        self._b = np.ascontiguousarray(tableau.b, dtype=float)
-        self._c = [float(x) for x in tableau.c]      # Python floats: stage times without numpy scalars
+        self._A, self._b, self._c = _stage_coefficients(tableau)
         self._fsal = False                     # KW[0] holds the first stage of the next step
         self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
 
