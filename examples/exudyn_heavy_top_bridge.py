@@ -3,7 +3,7 @@ changes (compare with exudyn_heavy_top_legacy.py):
 
     -mbs.SolveDynamic(simulationSettings)
     +from lgt_exudyn import SolveDynamic
-    +SolveDynamic(mbs, simulationSettings, method="dopri5", group="SE3", chart="exp")
+    +SolveDynamic(mbs, simulationSettings, method="dopri5", group="SO3xR3", chart="exp")
 
 Euler parameters stay unit without the normalization constraint, sensors and the
 solution file work as before, and adaptive error control is available.
@@ -39,7 +39,7 @@ simulationSettings.solution.file.write = False
 simulationSettings.solution.sensors.writePeriod = 0.01
 simulationSettings.timeIntegration.verboseMode = 0
 
-SolveDynamic(mbs, simulationSettings, method="dopri5", group="SE3", chart="exp",
+SolveDynamic(mbs, simulationSettings, method="dopri5", group="SO3xR3", chart="exp",
              rtol=1e-8, atol=1e-8, verbose=True)
 
 omega = mbs.GetSensorStoredData(sOmega)

@@ -35,8 +35,10 @@ def momentum(q, v):
 h0 = momentum(q, v)
 T, dt = 1.0, 4e-3                                  # 250 steps x 4 ABA calls = 1000, as the legacy loop
 m = PinocchioModel(model, q0=q, v0=v, tau=np.zeros(model.nv))
-r = simulate(m, (0, T), method="rkmk4", group="SE3", chart="exp", dt=dt, t_eval=[0, T])
-q1, v1 = m.pin_state(r.q[-1], r.V[-1])
+r = simulate(m, (0, T), method="rkmk4", group="SO3xR3", chart="exp", dt=dt, t_eval=[0, T])
+if not r.success:                                  # r.q is empty when the run stopped before T
+    raise SystemExit(f"the run failed: {r.message}")
+q1, v1 = m.pin_state(r.q[-1], r.V[-1])            # r.q: Pinocchio's q; r.V: the bridge's (ω, v)
 h1 = momentum(q1, v1)
 print(f"bridge rkmk4, dt = {dt}: {r.stats['n_f']} ABA calls, linear momentum drift "
       f"{np.abs(h1[:3] - h0[:3]).max():.2e}")

@@ -28,7 +28,8 @@ import numpy as np
 
 from .integrators import registry as _methods
 from .integrators.local import per_body
-from .lgt import check_chart, check_group
+from .errors import InputError
+from .lgt import CHARTS, GROUPS, check_chart, check_group
 
 #: a Jacobian entry counts as nonzero above this fraction of the body's largest entry
 _COUPLING_TOL = 1e-10
@@ -54,10 +55,26 @@ class Choice:
                 for n, g, c, r in zip(self.names, self.groups, self.charts, self.reasons)]
 
 
+def option(kind, value):
+    """``value`` when it names a group (``kind`` "group") or chart, or is "auto"; else
+    InputError listing every choice, "auto" with them."""
+    if value == "auto":
+        return value
+    try:
+        return check_group(value) if kind == "group" else check_chart(value)
+    except InputError:
+        names = GROUPS if kind == "group" else CHARTS
+        raise InputError(f"unknown {kind} {value!r}; use one of {[*names, 'auto']} (one value, "
+                         "or one per body).") from None
+
+
 def wants_auto(group, chart):
-    def has(o):
-        return o == "auto" if isinstance(o, str) else any(v == "auto" for v in o)
-    return has(group) or has(chart)
+    """True when an entry of ``group`` or ``chart`` (one value or one per body) is "auto";
+    InputError on an entry that is no group (chart) and not "auto"."""
+    def has(kind, o):
+        values = [o] if isinstance(o, str) else list(o)
+        return any([option(kind, v) == "auto" for v in values])
+    return has("group", group) | has("chart", chart)
 
 
 def offset_joints(model, q=None):
@@ -84,8 +101,8 @@ def choose(model, group="auto", chart="auto", *, method="rkmk4", project=True):
     """Resolve "auto" entries of ``group``/``chart`` (one value or one per body)."""
     lay = model.layout
     nb = lay.nbodies
-    groups = per_body(group, nb, "group", lambda g: g if g == "auto" else check_group(g))
-    charts = per_body(chart, nb, "chart", lambda c: c if c == "auto" else check_chart(c))
+    groups = per_body(group, nb, "group", lambda g: option("group", g))
+    charts = per_body(chart, nb, "chart", lambda c: option("chart", c))
     index3 = _methods.get(method).constraints == "index3"      # the method solves them itself
     enforced = index3 or (project and model.n_constraints > 0)
     offsets = offset_joints(model) if "auto" in groups else [False] * nb

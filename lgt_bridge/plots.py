@@ -86,8 +86,9 @@ def work_precision_plots(out, name, rows):
             ok = sorted((r for r in series[k] if r["success"] and r[key] is not None), key=lambda r: r[key])
             if ok:
                 ax.loglog([r[key] for r in ok], [max(r["pose_error"], 1e-17) for r in ok], **_kw(styles[k], k))
-        paths.append(_save(plt, fig, ax, out / f"{name}_error_vs_{fname}.png", xlabel,
-                           "final pose error (rad + m)", f"{name}: work-precision"))
+        _log_ticks(ax.xaxis)
+        paths.append(_save(plt, fig, ax, out / f"{name}_error_vs_{fname}.png", xlabel, POSE_ERROR_LABEL,
+                           f"{name}: work-precision"))
     if not any("energy_t" in r for r in rows):        # the model has no energy()
         return paths
     fig, ax = plt.subplots(figsize=(9.5, 5))
@@ -105,6 +106,27 @@ def work_precision_plots(out, name, rows):
     paths.append(_save(plt, fig, ax, out / f"{name}_energy_drift.png", "t [s]", "|E(t) - E(0)| / |E(0)|",
                        f"{name}: energy drift (finest setting of each series)"))
     return paths
+
+
+#: the y label of the work-precision plots (the pose error is defined in bench.metrics.POSE_ERROR)
+POSE_ERROR_LABEL = "pose error at the end time:\nlargest rotation error [rad] + largest position error [m]"
+
+
+def _log_ticks(axis):
+    """Readable labels on a log axis: at 1, 2, 5 × 10^k when the data span less than three
+    decades (matplotlib would label crowded minor ticks there), at the decades otherwise;
+    minor ticks unlabelled, labels in plain numbers ("0.02", "5000")."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    lo, hi = axis.get_data_interval()
+    few = lo > 0 and hi / lo < 1e3
+    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0) if few else (1.0,)))
+    axis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    axis.set_minor_formatter(NullFormatter())
+    if 0 < lo < hi:                              # data between two labels: widen to them
+        ticks = axis.get_major_locator().tick_values(lo, hi)
+        if sum(lo <= t <= hi for t in ticks) < 2:
+            axis.set_view_interval(max([t for t in ticks if t <= lo], default=lo),
+                                   min([t for t in ticks if t >= hi], default=hi), ignore=True)
 
 
 def _wall_label(rows):

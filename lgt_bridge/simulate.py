@@ -1,11 +1,12 @@
 """``simulate``: run a model on a bridge integrator and collect the result (one
 :class:`~lgt_bridge.simulation.Simulation`, set up and run once)."""
+from .lgt import DEFAULT_GROUP
 from .result import SimulationResult
 from .simulation import Simulation, make_stepper
 from .validation import check_inputs
 
 
-def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
+def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
              atol=1e-8, q0=None, V0=None, t_eval=None, progress=None, max_steps=1_000_000,
              project=True, rho_inf=0.9, newton_tol=1e-10):
     """Integrate ``model`` over ``t_span`` with a Lie group method through τ.
@@ -15,7 +16,7 @@ def simulate(model, t_span, *, method="rkmk4", group="SE3", chart="exp", dt=None
     "radau5" (implicit Radau IIA of order 5, adaptive: rtol/atol, dt = first step; for stiff
     models such as PD-controlled robots), "genalpha" (fixed dt, index-3 constraints,
     numerical damping ``rho_inf``).
-    group: "SE3", "SO3xR3" or "auto"; chart: "exp", "cay", "cay2" (second-order Cayley:
+    group: "SO3xR3" (default), "SE3" or "auto"; chart: "exp", "cay", "cay2" (second-order Cayley:
     up to 240° per stage) or "auto" (one value or one per body). "auto" picks per body what the model's structure needs
     (:mod:`lgt_bridge.auto`); ``stats["auto"]`` says what it chose and why, and
     ``result.group``/``result.chart`` hold the resolved per-body lists.

@@ -26,12 +26,13 @@ from .errors import ChartDomainError, InputError, ModelError, ModelNote
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector, project_initial
 from .integrators.problem import make_problem
+from .lgt import DEFAULT_GROUP
 from .progress import simulation_bar
 from .result import SimulationResult
 from .validation import check_options, check_state, check_t_eval
 
 
-def make_stepper(model, method, group="SE3", chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
+def make_stepper(model, method, group=DEFAULT_GROUP, chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
                  project=True, rho_inf=0.9, newton_tol=1e-10, span=None, fixed_steps=False):
     """The stepper behind a method name (the registry's builder), with its local problem
     and projector. Returns (stepper, dt): dt is the (macro) step to use (None: adaptive)."""
@@ -67,7 +68,7 @@ class Simulation:
     #: redos of one short step when the model's discontinuous states keep changing
     MAX_DISCONTINUOUS = 5
 
-    def __init__(self, model, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
+    def __init__(self, model, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
                  atol=1e-8, t0=0.0, t_end=None, q0=None, V0=None, max_steps=1_000_000, project=True,
                  rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, checked=False):
         if not checked:

@@ -12,6 +12,7 @@ import time
 
 from lgt_bridge.errors import InputError, LGTError, StepError
 from lgt_bridge.integrators import registry
+from lgt_bridge.lgt import DEFAULT_GROUP
 from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
@@ -29,7 +30,7 @@ def _note_once(key, text):
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
-                 method="dopri5", group="SE3", chart="exp", rtol=None, atol=None, rho_inf=0.9,
+                 method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
                  project=True, verbose=None, accelerations=None, progress=None):
     """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
     ignored), integrated by the bridge with ``method``/``group``/``chart``.
@@ -51,8 +52,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``; ``verbose``
       False silences it). ``realtime.active``/``simulateInRealtime``: ignored (one note).
 
-    ``rtol``/``atol`` override the settings' tolerances (without either and without
-    automaticStepSize: 1e-6/1e-8). ``group``/``chart`` may be "auto" as in
+    ``rtol``/``atol`` override the settings' tolerances (a missing one comes from the
+    settings, or, for dopri5/dop853 with automaticStepSize False, is the bridge's default
+    rtol 1e-6 / atol 1e-8); ``stats["tolerance_source"]`` says per tolerance where it came
+    from ("given", "settings", "default"). ``group``/``chart`` may be "auto" as in
     :func:`lgt_bridge.simulate`. ``progress``: a tqdm bar on stderr as in ``simulate``
     (None: only for runs longer than about 1 s on a terminal, never in CI; True/False force
     it). Returns True, and leaves the final state in the system, its accelerations included.
@@ -84,15 +87,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     fixed_tableau = spec.fixed_form and not auto_step and rtol is None and atol is None
     controlled = spec.adaptive and not fixed_tableau
     adaptive = spec.uses_tolerances and not fixed_tableau
-    tol_source = "given"
-    if rtol is None or atol is None:
-        tol_source = "default"
-        if adaptive and (auto_step or not spec.fixed_form):
-            tol_source = "timeIntegration.relative/absoluteTolerance"
-            rtol = rtol if rtol is not None else float(ti.relativeTolerance)
-            atol = atol if atol is not None else float(ti.absoluteTolerance)
-    rtol = 1e-6 if rtol is None else float(rtol)
-    atol = 1e-8 if atol is None else float(atol)
+    # where each tolerance comes from: given here, the script's settings, or the bridge default
+    from_settings = adaptive and (auto_step or not spec.fixed_form)
+    tol_source = {name: "given" if value is not None else "settings" if from_settings else "default"
+                  for name, value in (("rtol", rtol), ("atol", atol))}
+    rtol = float(rtol if rtol is not None else ti.relativeTolerance if from_settings else 1e-6)
+    atol = float(atol if atol is not None else ti.absoluteTolerance if from_settings else 1e-8)
     h_min = float(ti.minimumStepSize) if controlled else 0.0
     h_init = float(ti.initialStepSize) if controlled and ti.initialStepSize > 0 else None
     if controlled:
@@ -229,12 +229,21 @@ def _summary(resolved, asked):
     return ("auto→" if asked == "auto" else "") + ",".join(picked)
 
 
+#: a tolerance's source in words (given the name of its Exudyn setting)
+_TOL_SOURCE = {"given": lambda setting: "given",
+               "settings": lambda setting: f"from simulationSettings.timeIntegration.{setting}",
+               "default": lambda setting: "bridge default"}
+
+
 def describe(st):
     """One line: method, group, chart and tolerances (or step) of a SolveDynamic run."""
     if st.get("rtol") is not None:
-        src = {"given": "", "default": " (bridge default)"}.get(
-            st["tolerance_source"], f" (from simulationSettings.{st['tolerance_source']})")
-        tol = f"rtol={st['rtol']:g}, atol={st['atol']:g}{src}"
+        src = st["tolerance_source"]
+        if src["rtol"] == src["atol"]:
+            tol = f"rtol={st['rtol']:g}, atol={st['atol']:g} ({_TOL_SOURCE[src['rtol']]('relative/absoluteTolerance')})"
+        else:
+            tol = ", ".join(f"{k}={st[k]:g} ({_TOL_SOURCE[src[k]](setting)})" for k, setting in
+                            (("rtol", "relativeTolerance"), ("atol", "absoluteTolerance")))
     elif registry.get(st["method"]).fixed_form:
         tol = f"fixed step {st['dt']:g} s (automaticStepSize=False: endTime/numberOfSteps)"
     else:

@@ -320,8 +320,20 @@ class PinocchioModel(Model):
         return self.joints.twist_from_v(q, v)
 
     def pin_state(self, q, V):
-        """(q, v) in Pinocchio's own coordinates, for pin.forwardKinematics, frames, viewers."""
-        return np.array(q, float), self.v_from_twist(np.asarray(q, float), np.asarray(V, float))
+        """(q, v) in Pinocchio's own coordinates, for pin.forwardKinematics, frames, viewers.
+
+        ``q`` is one state of a result's ``r.q`` (already Pinocchio's q, ``x y z w``
+        quaternions); ``V`` the same state of ``r.V``, in the bridge's twist order (ω, v),
+        which this turns into Pinocchio's v (linear first). InputError for an empty or
+        ill-shaped state, e.g. ``r.q[-1]`` of a run that failed before its only output time
+        (check ``r.success``)."""
+        q, V = np.asarray(q, float), np.asarray(V, float)
+        if q.shape != (self.nq,) or V.shape != (self.layout.nv,):
+            raise InputError(f"pin_state(q, V): expected one state, q of shape ({self.nq},) and V of shape "
+                             f"({self.layout.nv},); got {q.shape} and {V.shape}. Pass r.q[i], r.V[i] of a "
+                             "result that has states (an empty r.q: the run failed before its first output "
+                             "time, see r.success and r.message).")
+        return q.copy(), self.v_from_twist(q, V)
 
     def _moved(self, q, d):
         """τ(q, d): q moved by the twist increment d (SO(3)xR³, exp chart)."""

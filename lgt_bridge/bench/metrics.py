@@ -8,6 +8,11 @@ from ..groups import quaternion as _q
 from ..groups import so3
 
 
+#: what "pose error" means in the bench's reports and plots
+POSE_ERROR = ("Pose error: at the end time, the largest rotation angle error of a body (rad) plus the largest "
+              "position or vector-coordinate error (m), against the reference run.")
+
+
 def pose_error(model, q, q_ref):
     """Largest body rotation angle + largest position error (+ vector coordinates)."""
     return sum(pose_errors(model, q, q_ref))

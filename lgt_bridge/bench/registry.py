@@ -17,9 +17,8 @@ from typing import Callable
 
 import numpy as np
 
-from .. import scenes as _scenes
+from .. import charts as _charts, scenes as _scenes
 from ..errors import InputError
-from ..charts import NAMES as CHART_NAMES
 from ..integrators import registry as _methods
 from ..lgt import GROUPS
 from ..plugins import adapters
@@ -115,6 +114,9 @@ def _base_scene(spec, scenario=None):
             path, fn = spec.rsplit(":", 1)
             if Path(path).is_file():
                 sc = BenchScene(lambda: _user_scene(path, fn, spec), None)
+            elif path.endswith(".py") or "/" in path or "\\" in path:
+                raise InputError(f"bench: no file {path!r} (scene {spec!r}: path/to/file.py:function "
+                                 "returning (model, t_end)).")
     if sc is None:
         names = [k + (f":{v.arg}" if isinstance(v, SceneFamily) else "") for k, v in sorted(scenes.items())]
         raise InputError(f"bench: unknown scene {spec!r}; use one of {names} or "
@@ -145,11 +147,38 @@ def _user_scene(path, fn, spec):
     return out
 
 
-def load_scene(spec, scenario=None):
-    """(model, t_end) from a scene name or 'file.py:function' (and a scenario of it)."""
+def load_scene(spec, scenario=None, check=False):
+    """(model, t_end) from a scene name or 'file.py:function' (and a scenario of it).
+    ``check``: build it twice and raise InputError unless both builds agree (t_end, initial
+    state and a first f evaluation): a sweep builds the scene once per run and compares the
+    runs with each other, which is meaningless if each build is another model."""
     sc = get_scene(spec, scenario)
     out = sc.make()
-    return out if sc.t_end is None else (out, sc.t_end)
+    first = out if sc.t_end is None else (out, sc.t_end)
+    if check:
+        second = sc.make()
+        second = second if sc.t_end is None else (second, sc.t_end)
+        differ = _differences(first, second)
+        if differ:
+            fn = f"{spec.rsplit(':', 1)[1]}()" if sc.t_end is None else "make()"
+            raise InputError(f"bench: scene {spec!r} built a different model on its second call ("
+                             f"{', '.join(differ)} differ): {fn} must be deterministic, because the bench "
+                             "builds the scene once per run and compares the runs; seed its random numbers "
+                             "(np.random.seed(0), pin.seed(0)) or build it from fixed data.")
+    return first
+
+
+def _differences(a, b):
+    """What differs between two builds (model, t_end) of a scene."""
+    def state(built):
+        m = built[0]
+        q, V = np.array(m.q0, float), np.array(m.V0, float)
+        return q, V, np.array(m.f(q.copy(), V.copy(), 0.0), float)
+    out = [] if a[1] == b[1] else ["t_end"]
+    for name, x, y in zip(("initial q", "initial V", "first f evaluation"), state(a), state(b)):
+        if x.shape != y.shape or not np.array_equal(x, y, equal_nan=True):
+            out.append(name)
+    return out
 
 
 # --- methods ------------------------------------------------------------------------------
@@ -180,7 +209,7 @@ def check_options(spec, methods, groups, charts, tols, dts, scenario=None):
     for m in methods:
         if method_kind(m) is None:
             raise InputError(f"bench: unknown method {m!r}; use {method_choices()}.")
-    for opt, vals, ok in (("--groups", groups, (*GROUPS, "auto")), ("--charts", charts, (*CHART_NAMES, "auto"))):
+    for opt, vals, ok in (("--groups", groups, (*GROUPS, "auto")), ("--charts", charts, (*_charts.NAMES, "auto"))):
         if not vals:
             raise InputError(f"bench: {opt} is empty.")
         for v in vals:

@@ -5,7 +5,7 @@ import json
 from pathlib import Path
 
 from ..errors import InputError
-from .metrics import best_at, front_gaps
+from .metrics import POSE_ERROR, best_at, front_gaps
 from .registry import BenchScene, SceneFamily, all_scenes, get_scene
 
 
@@ -30,10 +30,12 @@ def _f(v, fmt):
     return "–" if v is None else format(v, fmt)
 
 
-def write_report(out, spec, reference, rows, plots=True, target=1e-6):
+def write_report(out, spec, reference, rows, plots=True, target=1e-6, written=None):
     """JSON of every run, a Markdown report and (with matplotlib) the PNG plots; files
     named by :func:`report_name` (the scenario the sweep ran, ``reference["scenario"]``,
-    is part of the name when the scene declares scenarios)."""
+    is part of the name when the scene declares scenarios). Returns the Markdown's path;
+    ``written`` (a list): the paths of every file written are appended to it, the
+    Markdown's first."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     scenario = reference.get("scenario")
@@ -41,7 +43,8 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
     gaps = front_gaps(rows)
     best = {k: dict(series=v[0], wall_s=v[1], exact=v[2], interpolated=v[2])
             for k, v in best_at(rows, target).items()}
-    (out / f"bench_{name}.json").write_text(json.dumps(dict(scene=spec, scenario=scenario, reference=reference,
+    json_path = out / f"bench_{name}.json"
+    json_path.write_text(json.dumps(dict(scene=spec, scenario=scenario, reference=reference,
                                                             runs=rows,
                                                             auto_front=gaps, target=target, best_at_target=best),
                                                        indent=1))
@@ -56,6 +59,7 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
              f"Wall times: {timing_text(reference)}", "",
              "Every number in the table is measured; figures read off a line between two runs are marked "
              "*interpolated* where they appear.", "",
+             f"{POSE_ERROR}", "",
              "| method | group | chart | setting | pose error | velocity error | constraint | energy drift | f evals | steps | wall s | timed runs |",
              "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
@@ -99,6 +103,7 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
             lines.append(f"| {g['method']} | {g['value']:g} | {g['pose_error']:.2e} | "
                          f"{fmt(g['wall_ratio_same_method'])} | {fmt(g['n_f_ratio_same_method'])} | "
                          f"{fmt(g['n_f_ratio_all'])} |")
+    made = []
     if plots:
         from ..plots import work_precision_plots
         made = work_precision_plots(out, name, rows)
@@ -108,4 +113,6 @@ def write_report(out, spec, reference, rows, plots=True, target=1e-6):
             lines += ["", "(no plots: matplotlib is not installed; pip install 'lgt-bridge[plot]')"]
     path = out / f"bench_{name}.md"
     path.write_text("\n".join(lines) + "\n")
+    if written is not None:
+        written += [path, json_path, *made]
     return path

@@ -145,7 +145,7 @@ def sweep(spec, methods, groups, charts, tols, dts, workers=None, progress=None,
     if not (isinstance(repeat, (int, np.integer)) and repeat >= 0):
         raise InputError(f"bench: repeat = {repeat!r} must be a whole number ≥ 0 (0: keep the first pass's "
                          "wall times).")
-    model, T = load_scene(spec, scenario)
+    model, T = load_scene(spec, scenario, check=True)
     t0 = time.perf_counter()
     ref = simulate(model, (0.0, T), t_eval=[0.0, T], progress=progress, **REFERENCE)
     if not ref.success:

@@ -79,7 +79,7 @@ def _to_rotvec(p):
 
 
 def _from_gibbs(c):
-    """p0 = sqrt(σ/2), p = sqrt(σ/2) c with σ = 2/(1+|c|²) (ERRATA: QuatRodrigues)."""
+    """p0 = sqrt(σ/2), p = sqrt(σ/2) c with σ = 2/(1+|c|²) (docs/paper_corrections.md: QuatRodrigues)."""
     p0 = 1.0 / np.sqrt(1.0 + dot(c, c))
     return np.concatenate([p0[:, None], p0[:, None] * c], axis=1)
 

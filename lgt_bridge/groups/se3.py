@@ -5,7 +5,7 @@
         B(y) = -½ y~ + d(φ) (x~ y~ + y~ x~) + e(φ) (xᵀy) x~²
     dexp_X = [D, 0; -D B D, D],  D = dexp_x                 (block inverse of the above)
     cay X  = (I - X^)⁻¹ (I + X^) = [cay c~, (I + cay c~) d; 0, 1]   (eq. CaySE31)
-    dcay_X⁻¹ = [dcay_c⁻¹, 0; ½ (c~ - I) d~, ½ (I - c~)]      (eq. dCayInvSE3, ERRATA)
+    dcay_X⁻¹ = [dcay_c⁻¹, 0; ½ (c~ - I) d~, ½ (I - c~)]      (eq. dCayInvSE3, docs/paper_corrections.md)
     dcay_X = [σ (I + c~), 0; 2 (I - c~)⁻¹ e~, 2 (I - c~)⁻¹],  e = (I + c~)⁻¹ d
 """
 import numpy as np

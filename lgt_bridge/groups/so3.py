@@ -1,6 +1,6 @@
 """SO(3): exp/log, Cayley map and inverse, right-trivialized differentials, BCH.
 
-Conventions (paper section 3, corrected by ERRATA.md):
+Conventions (paper section 3, corrected in docs/paper_corrections.md):
     exp x~   = I + sinc φ x~ + ½ β x~²                       β = sinc²(φ/2)
     dexp_x   = I + ½ β x~ + c3(φ) x~²                          c3 = (1 - sinc φ)/φ²
     dexp_x⁻¹ = I - ½ x~ + d(φ) x~²                             d = (1 - γ)/φ², γ = sinc φ/β

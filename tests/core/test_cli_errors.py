@@ -174,8 +174,11 @@ def test_run_says_method_group_chart_and_tolerances():
 
 def test_solve_dynamic_describe():
     from lgt_exudyn.solve import describe
-    st = dict(method="dop853", group="SE3", chart="cay", rtol=1e-7, atol=1e-9, tolerance_source="given", dt=None)
-    assert describe(st) == "dop853 on SE3/cay, rtol=1e-07, atol=1e-09"
+    st = dict(method="dop853", group="SE3", chart="cay", rtol=1e-7, atol=1e-9,
+              tolerance_source=dict(rtol="given", atol="given"), dt=None)
+    assert describe(st) == "dop853 on SE3/cay, rtol=1e-07, atol=1e-09 (given)"
+    st["tolerance_source"] = dict(rtol="given", atol="default")
+    assert describe(st) == "dop853 on SE3/cay, rtol=1e-07 (given), atol=1e-09 (bridge default)"
     st.update(rtol=None, atol=None, tolerance_source=None, dt=1e-3, method="rkmk4")
     assert describe(st) == "rkmk4 on SE3/cay, fixed step 0.001 s (from endTime/numberOfSteps)"
 

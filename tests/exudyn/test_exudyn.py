@@ -179,7 +179,7 @@ def test_lgt_bridge_run_routes_a_legacy_script():
     native = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, check=True)
     routed = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "rkmk4"],
                             capture_output=True, text=True, check=True)
-    assert "ran rkmk4 on SE3/exp, fixed step 0.001 s" in routed.stdout
+    assert "ran rkmk4 on SO3xR3/exp, fixed step 0.001 s" in routed.stdout
     assert "; 300 steps" in routed.stdout and "f evaluations" in routed.stdout
     pos = lambda out: np.array([float(v) for v in out.split("FINAL_POSITION")[1].split()[:3]])
     assert np.abs(pos(native.stdout) - pos(routed.stdout)).max() < 1e-3
@@ -190,7 +190,7 @@ def test_lgt_bridge_run_routes_a_legacy_script():
                               capture_output=True, text=True, check=True)
     explicit = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "dop853",
                                "--rtol", "1e-10", "--atol", "1e-10"], capture_output=True, text=True, check=True)
-    assert "ran radau5 on SE3/exp, rtol=" in implicit.stdout
+    assert "ran radau5 on SO3xR3/exp, rtol=" in implicit.stdout
     assert np.abs(pos(implicit.stdout) - pos(explicit.stdout)).max() < 1e-6
 
 

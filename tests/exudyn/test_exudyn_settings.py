@@ -104,7 +104,7 @@ def test_tolerances_passed_explicitly_keep_error_control():
     SC, mbs = point_mass()
     SolveDynamic(mbs, fixed_settings(0.5, 50), method="dopri5", rtol=1e-9, atol=1e-9)
     st = mbs.sys["lgtBridgeStats"]
-    assert st["rtol"] == 1e-9 and st["dt"] is None and st["tolerance_source"] == "given"
+    assert st["rtol"] == 1e-9 and st["dt"] is None and st["tolerance_source"] == dict(rtol="given", atol="given")
 
 
 def test_fixed_dopri5_on_a_constrained_rigid_body_model():
@@ -370,7 +370,7 @@ def test_run_in_process_sees_the_script_as_python_would(tmp_path, monkeypatch, c
     path_before, argv_before, main_before = list(sys.path), list(sys.argv), sys.modules["__main__"]
     assert cli.main(["run", script, "--method", "dopri5", "--rtol", "0", "--atol", "1e-9"]) == 0
     out = capsys.readouterr().out
-    assert "SCRIPT_MAIN_RAN" in out and "SolveDynamic #1 ran dopri5 on SE3/exp, rtol=0, atol=1e-09" in out
+    assert "SCRIPT_MAIN_RAN" in out and "SolveDynamic #1 ran dopri5 on SO3xR3/exp, rtol=0, atol=1e-09" in out
     facts = json.loads((elsewhere / "facts.json").read_text())
     assert facts["name"] == "__main__" and facts["file"] == script == facts["main_file"]
     assert facts["argv"] == [script] and facts["cwd"] == str(elsewhere)
