@@ -12,8 +12,8 @@ import pytest
 from lgt_bridge import InputError, scenes
 from lgt_bridge.simulate import simulate
 
-ROOT = Path(__file__).parent.parent
-PENDULUM = Path(__file__).parent / "legacy" / "exudyn_pendulum.py"
+ROOT = Path(__file__).resolve().parents[2]
+PENDULUM = ROOT / "tests" / "models" / "legacy" / "exudyn_pendulum.py"
 
 
 def _cli(*args, cwd=ROOT):
