@@ -284,7 +284,7 @@ def test_verbose_mode_prints_the_description(capsys):
     SolveDynamic(mbs, s, method="dopri5")
     out = capsys.readouterr().out
     line = [ln for ln in out.splitlines() if ln.startswith("lgt-bridge: SolveDynamic")]
-    assert len(line) == 1 and "dopri5 on SE3/exp, rtol=1e-08, atol=1e-08" in line[0] and "steps" in line[0]
+    assert len(line) == 1 and "dopri5 on SO3xR3/exp, rtol=1e-08, atol=1e-08" in line[0] and "steps" in line[0]
     SC, mbs = em.spring_body_with_load()
     SolveDynamic(mbs, s, method="dopri5", verbose=False)
     assert "lgt-bridge: SolveDynamic" not in capsys.readouterr().out
