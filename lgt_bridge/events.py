@@ -319,6 +319,10 @@ class Tracker:
                             found.append((te, i))
                     sigma = sk
                 self.sigma[i] = sigma
+        else:
+            for i, x in enumerate(gb):
+                if x != 0.0:
+                    self.sigma[i] = _sign(x)
         self.g = gb
         stop = None
         for te, i in sorted(found):
