@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from lgt_bridge import InputError, Simulation, simulate
+from lgt_bridge import InputError, Simulation, scenes, simulate
 from lgt_bridge.events import HermiteStep, local_coordinates
 from lgt_bridge.groups import quaternion as _q
 from lgt_bridge.integrators.problem import make_problem
@@ -25,26 +25,12 @@ def Ry(a):
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
-def quat(R):
-    return _q._from_matrix(R[None])[0]
-
-
 def pendulum(theta0, constrained=False):
-    """A compound pendulum swinging about y: centre of mass at c = (0, 0, -D) from the pivot
-    (body frame), released from rest at θ0. Unconstrained: body frame at the pivot
-    (``pivot_com``); constrained: body frame at the centre of mass, a spherical joint to
-    ground at the pivot (projected). Returns (model, equivalent length I_pivot/(m d))."""
-    c = np.array([0.0, 0.0, -D])
-    R0 = Ry(theta0)
-    Jp = J_COM + MASS * (c @ c * np.eye(3) - np.outer(c, c))
-    L = Jp[1, 1] / (MASS * D)
-    if not constrained:
-        m = RigidBodySystem([MASS], [Jp], np.concatenate([np.zeros(3), quat(R0)]), np.zeros(6),
-                            pivot_com={0: c}, names=["pendulum"])
-    else:
-        m = RigidBodySystem([MASS], [J_COM], np.concatenate([R0 @ c, quat(R0)]), np.zeros(6),
-                            joints=[(0, -c, -1, np.zeros(3))], names=["pendulum"])
-    return m, L
+    """The scene (centre of mass at (0, 0, -D) from the pivot, J_COM about it, released from
+    rest at θ0 about y) and its equivalent length I_pivot/(m d), computed here."""
+    m = scenes.pendulum(theta0, d=D, mass=MASS, inertia=np.diag(J_COM), constrained=constrained)
+    I_pivot = J_COM[1, 1] + MASS * D * D
+    return m, I_pivot / (MASS * D)
 
 
 def com_x(constrained):
