@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, ModelError
 from .groups import quaternion as _q
 from .integrators.base import StepFailed
 
@@ -251,6 +251,9 @@ class Tracker:
             except StepFailed:
                 on_step(t, q, V)
                 raise
+            except ModelError as exc:         # the engine raised in f for the step's interpolant
+                on_step(t, q, V)
+                raise StepFailed(str(exc), error=ModelError) from exc
             on_step(t, q, V)
         return hooked
 
