@@ -1,5 +1,5 @@
-"""Every Exudyn model class the drop-in runs (the test models of tests/exudyn_joint_models.py
-and tests/exudyn_special_models.py) against Exudyn's own converged solution:
+"""Every Exudyn model class the drop-in runs (the test models of tests/models/exudyn_joint_models.py
+and tests/models/exudyn_special_models.py) against Exudyn's own converged solution:
 
     python benchmarks/bench_exudyn_classes.py [--out benchmarks/results]
 
@@ -15,7 +15,7 @@ import sys
 import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "models"))
 
 import exudyn_joint_models as jm  # noqa: E402
 import exudyn_special_models as sm  # noqa: E402

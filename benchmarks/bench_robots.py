@@ -56,6 +56,7 @@ import numpy as np
 import pinocchio as pin
 
 from lgt_bridge import bench, simulate
+from lgt_bridge.bench.metrics import cost_at_error
 from lgt_pinocchio import baselines as bl
 from lgt_pinocchio import bench as pb
 
@@ -88,15 +89,8 @@ def timed(fn):
 
 
 def at_error(rows, target, x="wall_s"):
-    """(cost x at error ``target``, exact) along one series: log-log interpolation between
-    the runs that bracket it, else the cheapest run below it (exact False); (None, False)."""
-    pts = sorted((r["error"], r[x]) for r in rows if r["ok"] and r["error"] > 0 and r[x])
-    for (e1, w1), (e2, w2) in zip(pts, pts[1:]):
-        if e1 <= target <= e2:
-            f = (np.log(target) - np.log(e1)) / (np.log(e2) - np.log(e1))
-            return float(np.exp(np.log(w1) + f * (np.log(w2) - np.log(w1)))), True
-    below = [w for e, w in pts if e <= target]
-    return (min(below), False) if below else (None, False)
+    """(cost x at error ``target``, exact) along one series (:func:`lgt_bridge.bench.metrics.cost_at_error`)."""
+    return cost_at_error([(r["error"], r[x]) for r in rows if r["ok"]], target)
 
 
 def best_series(rows, target, x="wall_s"):

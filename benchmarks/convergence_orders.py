@@ -17,7 +17,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from lgt_bridge import scenes
+from lgt_bridge import charts, scenes
 from lgt_bridge.analytic import torque_free_omega
 from lgt_bridge.simulate import simulate
 
@@ -60,7 +60,7 @@ def main(argv=None):
     Jp = np.diag([0.234375, 0.46875, 0.234375]) + m_ * (np.eye(3) - np.outer(c, c))
     Rht, _ = plain_rotation(Jp, np.array([0.0, 150.0, -4.61538]), 0.02, lambda R: np.cross(c, R.T @ (m_ * g)))
     rows = []
-    for method, (group, chart) in itertools.product(ORDERS, itertools.product(["SE3", "SO3xR3"], ["exp", "cay"])):
+    for method, (group, chart) in itertools.product(ORDERS, itertools.product(["SE3", "SO3xR3"], charts.NAMES)):
         for scene, dts in (("free body", FB_DTS[method]), ("heavy top", HT_DTS[method])):
             errs = []
             for dt in dts:

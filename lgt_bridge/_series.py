@@ -6,7 +6,7 @@ from their Taylor series in phi**2 instead, truncated adaptively to the
 largest angle in the batch (the first omitted term below 2e-17 relative); the series
 are accurate to double precision there and the closed forms lose at most a few
 ulps above it. In an integration step phi is small and only a handful of terms
-are evaluated. tests/test_series.py checks every function against mpmath.
+are evaluated. tests/core/test_series.py checks every function against mpmath.
 
     sinc(phi) = sin(phi) / phi,               beta(phi) = sinc(phi/2)**2
     c3(phi) = (1 - sinc phi) / phi**2          = (phi - sin phi) / phi**3

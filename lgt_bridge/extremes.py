@@ -2,7 +2,7 @@
 
 Each case returns rows of measured numbers against an independent reference (the
 matrix exponential, the analytic torque-free solution, a quaternion run, the
-conserved energy). ``tests/test_extremes.py`` asserts bounds on the same
+conserved energy). ``tests/core/test_extremes.py`` asserts bounds on the same
 measurements; ``lgt-bridge bench extremes`` writes them as a report.
 """
 import time

@@ -2,11 +2,13 @@
 
 Public for the adapters and for users who build their own loops: ``check_inputs``
 (t_span, method, tolerances, initial state), ``check_mass`` / ``mass_defects`` /
-``mass_message`` (a singular or indefinite mass matrix named by its body), and
-``validate_bodies`` (every body's coordinates, batched per parameterization).
+``mass_message`` (a singular or indefinite mass matrix named by its body),
+``validate_bodies`` (every body's coordinates, batched per parameterization), and
+``QUAT_NORM_TOL`` (how far a unit quaternion's norm may be from 1).
 """
 import numpy as np
 
+from ._checks import QUAT_NORM_TOL  # noqa: F401  (public here)
 from .errors import InputError
 from .integrators import registry as _methods
 
@@ -65,8 +67,14 @@ def check_state(model, q0=None, V0=None):
             i = int(np.flatnonzero(~np.isfinite(arr))[0])
             raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                              "give a finite initial state.")
-    validate_bodies(lay, q0)
-    check_mass(model, q0)
+    # the bodies' coordinates and the mass matrix at q0: checked once per model and q0 (a
+    # model's structure does not change; repeated runs from one state skip the checks)
+    memo = getattr(model, "__dict__", {})
+    key = q0.tobytes()
+    if memo.get("_lgt_checked_q0") != key:
+        validate_bodies(lay, q0)
+        check_mass(model, q0)
+        memo["_lgt_checked_q0"] = key
     return q0, V0
 
 
@@ -113,8 +121,10 @@ def mass_defects(M, A=None, rtol=None):
     The test is scale-free: M is scaled symmetrically by its diagonal (so kilograms and
     kg m² compare), a zero or negative diagonal entry is a defect of its own index, and an
     eigenvalue of the scaled matrix below ``rtol`` (default max(1e-12, 100 n eps)) is a
-    defect named by the largest entry of its eigenvector. Independent diagonal blocks
-    (the block-diagonal M of free bodies) are checked block by block."""
+    defect named by the largest entry of its eigenvector. The test is a Cholesky factorization
+    of the scaled matrix less rtol·I (cheap); the eigen-decomposition runs only to name the
+    defects when it fails. Independent diagonal blocks (the block-diagonal M of free bodies)
+    are checked block by block."""
     M = np.asarray(M, float)
     n = len(M)
     if n == 0:
@@ -149,9 +159,15 @@ def mass_defects(M, A=None, rtol=None):
     by_size = {}
     for idx in _diagonal_blocks(S):
         by_size.setdefault(len(idx), []).append(idx)
-    for group in by_size.values():                 # same-size blocks in one batched eigh
+    for group in by_size.values():                 # same-size blocks in one batched call
         I = np.array(group)
-        w, U = np.linalg.eigh(S[I[:, :, None], I[:, None, :]])
+        B = S[I[:, :, None], I[:, None, :]]
+        try:                                       # every eigenvalue > rtol: Cholesky of B - rtol I
+            np.linalg.cholesky(B - rtol * np.eye(B.shape[1]))
+            continue
+        except np.linalg.LinAlgError:              # name the defect: the eigen-decomposition
+            pass
+        w, U = np.linalg.eigh(B)
         for b, k in zip(*np.nonzero(w <= rtol)):
             out.append((int(I[b][np.argmax(np.abs(U[b][:, k]))]), float(w[b, k])))
     return sorted(out)

@@ -25,8 +25,8 @@ def convert_q(src, q, dst):
     out = np.array(dst.q0, float)
     for a, b in zip(src.layout.bodies, dst.layout.bodies):
         out[list(b.pos)] = q[list(a.pos)]
-        p = a.param._to_quat(q[list(a.rot)][None])
-        out[list(b.rot)] = b.param._from_quat(p, out[list(b.rot)][None])[0]
+        p = a.param.to_quat(q[list(a.rot)])
+        out[list(b.rot)] = b.param.from_quat(p, out[list(b.rot)])
     out[list(dst.layout.vector_q)] = q[list(src.layout.vector_q)]
     return out
 

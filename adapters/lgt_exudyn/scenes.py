@@ -3,7 +3,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.utilities import ObjectGround, RigidBodyInertia
 
-from lgt_bridge.groups import quaternion as _q
+from lgt_bridge.groups.batch import to_matrix
 from lgt_bridge.scenes import principal_inertia
 
 EP = exu.NodeType.RotationEulerParameters
@@ -77,7 +77,7 @@ def free_bodies(n=8, node=ROTVEC, seed=0):
         J = principal_inertia(rng)
         p = rng.normal(size=4)
         p /= np.linalg.norm(p)
-        R = _q._to_matrix(p[None])[0]
+        R = to_matrix(p[None])[0]
         mbs.CreateRigidBody(inertia=RigidBodyInertia(mass=1.0, inertiaTensor=J), nodeType=node,
                             referencePosition=rng.normal(size=3), referenceRotationMatrix=R,
                             initialAngularVelocity=rng.normal(size=3) * 2.0, initialVelocity=rng.normal(size=3),

@@ -59,17 +59,22 @@ def energy_drift(model, t, q, V, success):
     return out
 
 
-def wall_at_error(rows, target, key="pose_error"):
-    """(wall time at ``target`` error, exact?) along one series' runs: log-log
-    interpolation where the runs bracket the target, otherwise the cheapest run at or
-    below it (an upper bound, exact = False); (None, False) when no run reaches it."""
-    pts = sorted((r[key], r["wall_s"]) for r in rows if r.get("success", True) and r[key] > 0 and np.isfinite(r[key]))
+def cost_at_error(points, target):
+    """(cost at ``target`` error, exact?) along one series given as (error, cost) pairs:
+    log-log interpolation where the runs bracket the target, otherwise the cheapest run at
+    or below it (an upper bound, exact = False); (None, False) when no run reaches it."""
+    pts = sorted((e, c) for e, c in points if e > 0 and np.isfinite(e) and c)
     for (e1, w1), (e2, w2) in zip(pts, pts[1:]):
         if e1 <= target <= e2:
             f = (np.log(target) - np.log(e1)) / (np.log(e2) - np.log(e1))
             return float(np.exp(np.log(w1) + f * (np.log(w2) - np.log(w1)))), True
     below = [w for e, w in pts if e <= target]
     return (min(below), False) if below else (None, False)
+
+
+def wall_at_error(rows, target, key="pose_error"):
+    """:func:`cost_at_error` of the wall time along one series' successful runs."""
+    return cost_at_error([(r[key], r["wall_s"]) for r in rows if r.get("success", True)], target)
 
 
 def best_at(rows, target):

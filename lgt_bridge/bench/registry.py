@@ -19,7 +19,9 @@ import numpy as np
 
 from .. import scenes as _scenes
 from ..errors import InputError
+from ..charts import NAMES as CHART_NAMES
 from ..integrators import registry as _methods
+from ..lgt import GROUPS
 from ..plugins import adapters
 
 
@@ -178,7 +180,7 @@ def check_options(spec, methods, groups, charts, tols, dts, scenario=None):
     for m in methods:
         if method_kind(m) is None:
             raise InputError(f"bench: unknown method {m!r}; use {method_choices()}.")
-    for opt, vals, ok in (("--groups", groups, ("SE3", "SO3xR3", "auto")), ("--charts", charts, ("exp", "cay", "auto"))):
+    for opt, vals, ok in (("--groups", groups, (*GROUPS, "auto")), ("--charts", charts, (*CHART_NAMES, "auto"))):
         if not vals:
             raise InputError(f"bench: {opt} is empty.")
         for v in vals:

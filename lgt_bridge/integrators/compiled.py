@@ -26,14 +26,7 @@ class CompiledProblem(LocalProblem):
 
     def __init__(self, model, group="SE3", chart="exp"):
         super().__init__(model, group, chart)
-        self.bt = _k.body_table(self.sets, PARAM_CODES)
-        # rows (iq, iv, ix, iq_sin): iq_sin = -1 for a vector coordinate, else the sin entry
-        # of a circle coordinate whose cos entry is iq
-        vec = np.stack([self.vq, self.vv, self.vx, np.full(len(self.vq), -1)], axis=1)
-        circ = np.stack([self.cq[:, 0], self.cv, self.cx, self.cq[:, 1]], axis=1)
-        self.vt = np.ascontiguousarray(np.concatenate([vec.reshape(-1, 4), circ.reshape(-1, 4)]), np.int64)
-        nb, nq = len(self.bt), self.layout.nq
-        self.off, size = _k.work_layout(self.nX, self.nv, nq, nb)
+        size = self.work_size
         self.work = np.zeros(size)
         (self._X, self._W, self._q, self._V, self._W0, self._qk, self._pk,
          self._p) = _k.views(self.work, self.off)
@@ -45,6 +38,20 @@ class CompiledProblem(LocalProblem):
         self._pending = None           # (i, t, ts) of that stage
         self._xd = self.work[self.off[_k.OXD]:self.off[_k.OXD] + self.nX]     # the scratch Ẋ
         self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)     # (rates: no affine part)
+
+    @staticmethod
+    def analyze(model, group, chart):
+        """The reference problem's analysis and the kernels' tables: the body table, the
+        vector/circle table ``vt`` and the work array's layout."""
+        a = LocalProblem.analyze(model, group, chart)
+        a["bt"] = _k.body_table(a["sets"], PARAM_CODES)
+        # rows (iq, iv, ix, iq_sin): iq_sin = -1 for a vector coordinate, else the sin entry
+        # of a circle coordinate whose cos entry is iq
+        vec = np.stack([a["vq"], a["vv"], a["vx"], np.full(len(a["vq"]), -1)], axis=1)
+        circ = np.stack([a["cq"][:, 0], a["cv"], a["cx"], a["cq"][:, 1]], axis=1)
+        a["vt"] = np.ascontiguousarray(np.concatenate([vec.reshape(-1, 4), circ.reshape(-1, 4)]), np.int64)
+        a["off"], a["work_size"] = _k.work_layout(a["nX"], a["nv"], model.layout.nq, len(a["bt"]))
+        return a
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):

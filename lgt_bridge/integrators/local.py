@@ -48,6 +48,23 @@ class BodySet:
         return self.lgt.base(rows) if quats is None else (rows[:, :3], rows[:, 3:], quats)
 
 
+def analysis(model, group, chart, analyze):
+    """``analyze(model, group, chart)``, computed once per model and (group, chart) and
+    kept on the model (its layout does not change): repeated runs of one model skip it."""
+    key = (analyze.__qualname__, _key(group), _key(chart))
+    cache = getattr(model, "__dict__", None)
+    if cache is None:
+        return analyze(model, group, chart)
+    cache = cache.setdefault("_lgt_analysis", {})
+    if key not in cache:
+        cache[key] = analyze(model, group, chart)
+    return cache[key]
+
+
+def _key(option):
+    return option if isinstance(option, str) else tuple(option)
+
+
 def per_body(option, n, name, check):
     """A group/chart option given once or per body -> list of n values."""
     if isinstance(option, str):
@@ -68,38 +85,47 @@ class LocalProblem:
 
     def __init__(self, model, group="SE3", chart="exp"):
         self.model = model
-        lay = self.layout = model.layout
+        self.layout = model.layout
+        self.__dict__.update(analysis(model, group, chart, type(self).analyze))
+        self.n_f = 0
+
+    @staticmethod
+    def analyze(model, group, chart):
+        """What the problem needs from the model's layout, groups and charts alone (the
+        model's one-time analysis, shared by every problem of that combination): the body
+        sets, index arrays, chart rows and scales."""
+        lay = model.layout
         nb = lay.nbodies
-        self.groups = per_body(group, nb, "group", _lgt.check_group)
-        self.charts = per_body(chart, nb, "chart", _lgt.check_chart)
+        a = {}
+        a["groups"] = per_body(group, nb, "group", _lgt.check_group)
+        a["charts"] = per_body(chart, nb, "chart", _lgt.check_chart)
         sizes = np.array([3 if b.rotation_only else 6 for b in lay.bodies], int)
         xoff = np.concatenate([[0], np.cumsum(sizes)])
         keys = {}
         for i, b in enumerate(lay.bodies):
-            keys.setdefault((b.param.name, self.groups[i], self.charts[i], b.rotation_only), []).append(i)
-        self.sets = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay, xoff) for (_, g, c, _), ids in keys.items()]
-        self.vq = np.array(lay.vector_q, int)
-        self.vv = np.array(lay.vector_v, int)
-        self.vx = int(xoff[-1]) + np.arange(len(self.vq))
-        self.cq = np.array(lay.circle_q, int).reshape(-1, 2)
-        self.cv = np.array(lay.circle_v, int)
-        self.cx = int(xoff[-1]) + len(self.vq) + np.arange(len(self.cv))
-        self.nX = int(xoff[-1]) + len(self.vq) + len(self.cv)
-        self.nv = lay.nv
-        self.n_f = 0
+            keys.setdefault((b.param.name, a["groups"][i], a["charts"][i], b.rotation_only), []).append(i)
+        sets = a["sets"] = [BodySet(lay.bodies[ids[0]].param, g, c, ids, lay, xoff)
+                            for (_, g, c, _), ids in keys.items()]
+        a["vq"], a["vv"] = np.array(lay.vector_q, int), np.array(lay.vector_v, int)
+        a["vx"] = int(xoff[-1]) + np.arange(len(a["vq"]))
+        a["cq"], a["cv"] = np.array(lay.circle_q, int).reshape(-1, 2), np.array(lay.circle_v, int)
+        a["cx"] = int(xoff[-1]) + len(a["vq"]) + np.arange(len(a["cv"]))
+        nX = a["nX"] = int(xoff[-1]) + len(a["vq"]) + len(a["cv"])
+        a["nv"] = lay.nv
         # the rotation rows of the bodies whose chart has a domain limit, with 1/limit each
-        bounded = [s for s in self.sets if s.chart.bounded]
-        self.chart_rows = np.concatenate([s.xidx[:, :3] for s in bounded] or [np.zeros((0, 3), int)])
-        self.chart_inv_limit = np.concatenate([np.full(len(s.ids), 1.0 / s.chart.limit) for s in bounded]
+        bounded = [s for s in sets if s.chart.bounded]
+        a["chart_rows"] = np.concatenate([s.xidx[:, :3] for s in bounded] or [np.zeros((0, 3), int)])
+        a["chart_inv_limit"] = np.concatenate([np.full(len(s.ids), 1.0 / s.chart.limit) for s in bounded]
                                               or [np.zeros(0)])
-        self.chart_of_row = [s.chart for s in bounded for _ in s.ids]
-        self.bounded = bool(len(self.chart_rows))
+        a["chart_of_row"] = [s.chart for s in bounded for _ in s.ids]
+        a["bounded"] = bool(len(a["chart_rows"]))
         # dψ⁻¹_0 = scale·I: an exp-coordinate increment ΔX is the chart's scale·ΔX to second
         # order (Cayley charts: cay(ΔX/2) = exp(ΔX) + O(|ΔX|³)); rotation rows, on SE(3) also
         # the translation rows (the R³ factor of SO(3)xR³ is additive)
-        self.chart_scale = np.ones(self.nX)
-        for s in self.sets:
-            self.chart_scale[s.xidx if s.se3 else s.xidx[:, :3]] = s.chart.scale
+        scale = a["chart_scale"] = np.ones(nX)
+        for s in sets:
+            scale[s.xidx if s.se3 else s.xidx[:, :3]] = s.chart.scale
+        return a
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):

@@ -21,7 +21,7 @@ tiny steps by stability: it takes steps sized by accuracy alone, at order 5.
   base. Constrained models are projected after each step, as with the explicit methods.
 
 The tableau is computed here from its nodes (a_ij = ∫_0^{c_i} ℓ_j, the eigen-decomposition of
-A⁻¹, the error weights from the embedded formula's order conditions); tests/test_radau.py
+A⁻¹, the error weights from the embedded formula's order conditions); tests/core/test_radau.py
 checks it against the order conditions and Hairer's published error weights.
 """
 import math
@@ -346,7 +346,7 @@ def model_jacobian(prob, kin, q, V, W, f0, t, sparse_kw=False):
     ½ [X, W]) + O(X²)): ∂Ẋ/∂W = S (the chart scale), ∂Ẋ_ω/∂X_ω = -½ ω~ and on SE(3) also
     ∂Ẋ_v/∂X_ω = -½ ũ, ∂Ẋ_v/∂X_v = -½ ω~. Dense for small models, scipy.sparse (per-body
     blocks, M by SuperLU) for large ones (``sparse_kw``: the model's iteration_matrix takes
-    ``sparse``). tests/test_radau.py holds it against differences of F."""
+    ``sparse``). tests/core/test_radau.py holds it against differences of F."""
     from ..groups._vec import hat
     m = prob.model
     nX, nv = prob.nX, len(W)

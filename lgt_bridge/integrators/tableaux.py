@@ -7,7 +7,7 @@ their continuous extension (dense output): ``P`` (Dormand-Prince 5(4): y(θ) = y
 h Σ_i K_i Σ_k P_ik θ^(k+1)) or ``extra`` = (A rows, c) of the extra stages and ``D``
 (DOP853, Hairer's contd8). DOP853's coefficients are scipy's (``scipy.integrate._ivp.
 dop853_coefficients``, Hairer's dop853.f): about 200 published numbers we do not
-retype; tests/test_dop853.py checks them against the order conditions.
+retype; tests/core/test_dop853.py checks them against the order conditions.
 """
 from dataclasses import dataclass
 from functools import lru_cache

@@ -24,14 +24,16 @@ reference is the scene's ``_f_numpy``, ``_constraints_numpy`` etc.; tests hold t
 equal (1e-13). Plain loops: ``NUMBA_DISABLE_JIT=1`` runs the same source interpreted.
 """
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from . import guard_cache
+from .linalg import cholesky, cholesky_solve
 from .rotations import cross, to_quat
 
-guard_cache(__file__)
+guard_cache(__file__, extra=(Path(__file__).with_name("linalg.py"),))
 
 # per body float columns
 MASS, MINVT, J, JINV, COM = 0, 1, 2, 11, 20
@@ -228,32 +230,6 @@ def _gamma(nj, jt, jtf, R, V, out):
 
 
 @njit(cache=True)
-def _cholesky_solve(S, n, first, x):
-    """x <- S⁻¹ x for S (n x n, row major) symmetric positive definite with the row
-    envelope ``first``; S's lower triangle is overwritten by its Cholesky factor L,
-    with 1 / L_ii on the diagonal."""
-    for i in range(n):
-        fi = first[i]
-        for j in range(fi, i + 1):
-            s = S[n * i + j]
-            for k in range(max(fi, first[j]), j):
-                s -= S[n * i + k] * S[n * j + k]
-            if j == i:
-                S[n * i + i] = 1.0 / math.sqrt(s)
-            else:
-                S[n * i + j] = s * S[n * j + j]
-    for i in range(n):                      # L y = x
-        s = x[i]
-        for k in range(first[i], i):
-            s -= S[n * i + k] * x[k]
-        x[i] = s * S[n * i + i]
-    for i in range(n - 1, -1, -1):          # Lᵀ x = y, column by column of L
-        x[i] *= S[n * i + i]
-        for k in range(first[i], i):
-            x[k] -= S[n * i + k] * x[i]
-
-
-@njit(cache=True)
 def f(I, F, q, V, load, out):
     """out = V̇ = M⁻¹(Q + load - Aᵀλ), A M⁻¹Aᵀ λ = A M⁻¹(Q + load) + γ; ``load``
     (nb, 6) (torque body, force inertial) is added when it has rows."""
@@ -314,7 +290,11 @@ def f(I, F, q, V, load, out):
                             if r == c:
                                 s += mi
                             S[n * (3 * k + r) + 3 * l + c] += sg * s
-    _cholesky_solve(S, n, first, lam)
+    if not cholesky(S, n, first)[0]:         # redundant joints: no unique λ, V̇ not finite
+        for i in range(out.shape[0]):
+            out[i] = math.nan
+        return
+    cholesky_solve(S, n, first, lam)
     # V̇ -= M⁻¹Aᵀλ: J⁻¹Bᵀλ = Gλ on ω, λ/m on ṙ
     for k in range(nj):
         l0, l1, l2 = lam[3 * k], lam[3 * k + 1], lam[3 * k + 2]

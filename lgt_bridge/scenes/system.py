@@ -89,6 +89,13 @@ class RigidBodySystem(Model):
         self.compiled = _backend.compiled()
         if self.compiled:
             self._pack()
+        # the backend chosen once: the protocol's methods call these implementations
+        kf = "_kernel" if self.compiled else "_numpy"
+        kc = "_kernel" if self.compiled and self.n_constraints else "_numpy"
+        self._f, self._forces = getattr(self, "_f" + kf), getattr(self, "_forces" + kf)
+        self._constraints = getattr(self, "_constraints" + kc)
+        self._constraint_jacobian = getattr(self, "_constraint_jacobian" + kc)
+        self._constraint_gamma = getattr(self, "_constraint_gamma" + kc)
 
     def _pack(self):
         """Kernel tables and work buffers, allocated once (numba is imported here)."""
@@ -123,8 +130,9 @@ class RigidBodySystem(Model):
 
     def forces(self, q, V, t):
         """Q(q, V, t) of M V̇ = Q - Aᵀλ (torque body, force inertial per body); a new array."""
-        if not self.compiled:
-            return self._forces_numpy(q, V, t)
+        return self._forces(q, V, t)
+
+    def _forces_kernel(self, q, V, t):
         out = np.empty(6 * self.nb)
         (_KS or _kernels()).forces(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
         return out
@@ -250,8 +258,9 @@ class RigidBodySystem(Model):
 
     def f(self, q, V, t):
         """V̇ (index 1): M⁻¹(Q - Aᵀλ) with A M⁻¹Aᵀ λ = A M⁻¹Q + γ; a new array."""
-        if not self.compiled:
-            return self._f_numpy(q, V, t)
+        return self._f(q, V, t)
+
+    def _f_kernel(self, q, V, t):
         out = np.empty(6 * self.nb)
         (_KS or _kernels()).f(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
         return out
@@ -281,8 +290,9 @@ class RigidBodySystem(Model):
         return MiQ - MiAt @ lam
 
     def constraints(self, q):
-        if not (self.compiled and self.n_constraints):
-            return self._constraints_numpy(q)
+        return self._constraints(q)
+
+    def _constraints_kernel(self, q):
         out = np.empty(self.n_constraints)
         q = np.ascontiguousarray(q, dtype=np.float64)
         (_KS or _kernels()).constraints(self._kI, self._kF, q, out)
@@ -299,8 +309,9 @@ class RigidBodySystem(Model):
 
     def constraint_jacobian(self, q):
         """ġ = A V: for body i, [-R_i s̃_i, I] (and the negative for body j)."""
-        if not (self.compiled and self.n_constraints):
-            return self._constraint_jacobian_numpy(q)
+        return self._constraint_jacobian(q)
+
+    def _constraint_jacobian_kernel(self, q):
         A = np.zeros((self.n_constraints, 6 * self.nb))
         q = np.ascontiguousarray(q, dtype=np.float64)
         (_KS or _kernels()).constraint_jacobian(self._kI, self._kF, q, A)
@@ -326,8 +337,9 @@ class RigidBodySystem(Model):
 
     def constraint_gamma(self, q, V):
         """γ = (d/dt A) V = R_i (ω_i × (ω_i × s_i)) - R_j (ω_j × (ω_j × s_j))."""
-        if not (self.compiled and self.n_constraints):
-            return self._constraint_gamma_numpy(q, V)
+        return self._constraint_gamma(q, V)
+
+    def _constraint_gamma_kernel(self, q, V):
         out = np.empty(self.n_constraints)
         q = np.ascontiguousarray(q, dtype=np.float64)
         V = np.ascontiguousarray(V, dtype=np.float64)

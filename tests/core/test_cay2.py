@@ -71,16 +71,16 @@ def test_angle_inverse_and_symmetry(axis, phi):
 def test_quaternion_near_the_full_turn_against_mpmath(norm):
     """Towards |x| → ∞ (a full turn) the rational quaternion ((4 - s), 4x)/(4 + s) keeps full
     relative accuracy: against cay(x/2)'s quaternion (2, x)/√(4 + s) squared at 50 digits."""
-    mpmath.mp.dps = 50
-    x = np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]) * norm
-    d, _ = CAY2.increment(x[None])
-    got = d[0] + np.array([1.0, 0, 0, 0])
-    xm = [mpmath.mpf(float(v)) for v in x]
-    s = mpmath.sqrt(4 + sum(v * v for v in xm))
-    h = [2 / s] + [v / s for v in xm]                        # the quaternion of cay(x/2)
-    sq = [h[0] * h[0] - sum(v * v for v in h[1:])] + [2 * h[0] * v for v in h[1:]]
-    for g, e in zip(got, sq):
-        assert abs(mpmath.mpf(float(g)) - e) <= 4e-16 * max(abs(e), mpmath.mpf(1) / norm)
+    with mpmath.workdps(50):
+        x = np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]) * norm
+        d, _ = CAY2.increment(x[None])
+        got = d[0] + np.array([1.0, 0, 0, 0])
+        xm = [mpmath.mpf(float(v)) for v in x]
+        s = mpmath.sqrt(4 + sum(v * v for v in xm))
+        h = [2 / s] + [v / s for v in xm]                        # the quaternion of cay(x/2)
+        sq = [h[0] * h[0] - sum(v * v for v in h[1:])] + [2 * h[0] * v for v in h[1:]]
+        for g, e in zip(got, sq):
+            assert abs(mpmath.mpf(float(g)) - e) <= 4e-16 * max(abs(e), mpmath.mpf(1) / norm)
 
 
 def _right_fd(group, X, h=1e-6):

@@ -211,7 +211,7 @@ def test_numpy_backend_never_imports_numba():
 def test_kernels_run_interpreted():
     """NUMBA_DISABLE_JIT=1: the same source runs as plain Python and agrees, every scene."""
     out = run_python("import os, sys, numpy as np\n"
-                      f"sys.path.insert(0, {os.path.dirname(__file__)!r})\n"
+                      f"sys.path[:0] = [{os.path.dirname(__file__)!r}, {os.path.join(os.path.dirname(os.path.dirname(__file__)), 'models')!r}]\n"
                       "import test_scene_kernels as T\n"
                       "class Env:\n"
                       "    setenv = staticmethod(os.environ.__setitem__)\n"

@@ -290,7 +290,7 @@ def _plain_reference(model, q0, v0, T):
     return q
 
 
-@pytest.mark.parametrize("group,chart", [("SE3", "exp"), ("SO3xR3", "cay")])
+@pytest.mark.parametrize("group,chart", [("SE3", "exp"), ("SO3xR3", "cay"), ("SE3", "cay2"), ("SO3xR3", "cay2")])
 def test_spherical_joint_as_rotation_only_body(group, chart):
     model = ball_chain()
     rng = np.random.default_rng(1)

@@ -175,7 +175,7 @@ def test_drop_in_sensors_and_solution_file_as_exudyn_writes_them(tmp_path):
 
 
 def test_lgt_bridge_run_routes_a_legacy_script():
-    script = HERE / "legacy" / "exudyn_pendulum.py"
+    script = HERE.parent / "models" / "legacy" / "exudyn_pendulum.py"
     native = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, check=True)
     routed = subprocess.run([sys.executable, "-m", "lgt_bridge.cli", "run", str(script), "--method", "rkmk4"],
                             capture_output=True, text=True, check=True)
@@ -293,7 +293,8 @@ def test_bench_free_bodies_exudyn_dopri5_native():
     assert bench.pose_error(rv, q_rv, rv.q0) < 1e-15
 
 
-def test_drop_in_dop853_interpolates_exudyn_output_steps():
+@pytest.mark.parametrize("group,chart", [("SO3xR3", "exp"), ("SE3", "cay2"), ("SO3xR3", "cay2")])
+def test_drop_in_dop853_interpolates_exudyn_output_steps(group, chart):
     """SolveDynamic(method="dop853"): Exudyn's 400 output steps are interpolated (dense
     output), not forced as step ends, and the sensor values at those times match the
     independent plain-quaternion reference (EP heavy top with its spherical joint)."""
@@ -303,7 +304,7 @@ def test_drop_in_dop853_interpolates_exudyn_output_steps():
     sens = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
                                     outputVariableType=exu.OutputVariableType.RotationMatrix))
     mbs.Assemble()
-    SolveDynamic(mbs, em.settings(T, n_out, sensors=True), method="dop853", group="SO3xR3",
+    SolveDynamic(mbs, em.settings(T, n_out, sensors=True), method="dop853", group=group, chart=chart,
                  rtol=1e-10, atol=1e-10)
     st = mbs.sys["lgtBridgeStats"]
     assert st["success"] and st["exudyn_steps"] == n_out

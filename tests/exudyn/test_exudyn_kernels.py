@@ -80,12 +80,12 @@ def test_state_writes_and_moved_state(built, rng):
     SC, m, P = built
     qpos, qvel = np.zeros(m.n2), np.zeros(m.n2)
     for q, V, t in states(m, rng):
-        K.write(P.I, P.W, q, V, 0.0, qpos, qvel)
+        K.write(P.T, P.off, P.w, q, V, 0.0, qpos, qvel)
         assert close(qpos, q - m.ref) and close(qvel, m.rates_from_twist(q, V))
         assert close(qvel, m.H(q) @ V)
-        assert K.write(P.I, P.W, q, V, 0.0, qpos, qvel) == 0.0
+        assert K.write(P.T, P.off, P.w, q, V, 0.0, qpos, qvel) == 0.0
         for eps in (1e-5, -1e-5, 2.5):
-            h = K.write(P.I, P.W, q, V, eps, qpos, qvel)
+            h = K.write(P.T, P.off, P.w, q, V, eps, qpos, qvel)
             assert h == eps / max(1.0, np.abs(V).max())
             qm = m._moved(q, V, h)
             assert close(P.qm, qm)
@@ -104,11 +104,11 @@ def test_forces_constraint_matrix_and_solve(built, rng):
         m.solver.ComputeMassMatrix(m.mbs)
         M = np.array(m.solver.GetSystemMassMatrix())
         Qg, Mg = np.zeros(nv), np.zeros((nv, nv))
-        K.forces(P.I, P.W, q, V, R, M, Qg, Mg)
+        K.forces(P.T, P.off, P.w, q, V, R, M, Qg, Mg)
         assert close(Qg, H.T @ (Q - M @ m.Hdot_V(q, V))) and close(Mg, H.T @ M @ H)
         Qbar = np.zeros(nv)
         if P.constant_mass:
-            K.forces(P.I, P.W, q, V, R, P.empty, Qbar, P.empty)
+            K.forces(P.T, P.off, P.w, q, V, R, P.empty, Qbar, P.empty)
             assert close(Qbar, Qb)
         else:
             assert close(Qg, Qb) and close(Mg, Mb)
@@ -116,7 +116,7 @@ def test_forces_constraint_matrix_and_solve(built, rng):
         Mpass = P.empty if P.constant_mass else Mb
 
         def solve(A_, g_):
-            return K.solve(P.I, P.W, Mpass, A_, Qb, g_, Vd)
+            return K.solve(P.T, P.off, P.w, Mpass, A_, Qb, g_, Vd)
         if A is None:
             assert solve(np.zeros((0, nv)), np.zeros(0)) == 0
             assert close(Vd, np.linalg.solve(Mb, Qb))
@@ -125,11 +125,11 @@ def test_forces_constraint_matrix_and_solve(built, rng):
         m.sd.SetODE2Coordinates(q - m.ref)
         C = np.ascontiguousarray(m._Cq())
         A1, A2 = np.zeros(A.shape), np.zeros(A.shape)
-        K.constraint_matrix(P.I, P.W, q, C, np.arange(len(C), dtype=np.int64), A1)
+        K.constraint_matrix(P.T, P.off, P.w, q, C, np.arange(len(C), dtype=np.int64), A1)
         S = m.solver
         S.SetSystemJacobian(m._jac_zero)
         S.ComputeJacobianAE(m.mbs, 1.0, 1.0 if len(m.velocity_rows) else 0.0, 0.0, False)
-        K.constraint_matrix(P.I, P.W, q, S.GetSystemJacobian(), P.rows, A2)
+        K.constraint_matrix(P.T, P.off, P.w, q, S.GetSystemJacobian(), P.rows, A2)
         assert close(A1, A) and close(A2, A) and close(A1, C @ H)
         assert solve(A, gam) == 0
         assert close(Vd, solve_kkt(Mb, A, Qb, -gam)[0])
@@ -209,7 +209,7 @@ def test_redundant_rows_fall_back_to_the_minimum_norm_solve(dense, rng):
     A2 = np.ascontiguousarray(np.vstack([A, A[:2]]))     # rows 3, 4 repeat rows 0, 1
     g2 = np.concatenate([gam, gam[:2]])
     Vd = np.zeros(m.nv)
-    flag = K.solve(P.I, P.W, Mb if dense else P.empty, A2, Qb, g2, Vd)
+    flag = K.solve(P.T, P.off, P.w, Mb if dense else P.empty, A2, Qb, g2, Vd)
     assert flag == 1
     K.solve_fallback(P, 5, Vd)
     assert close(Vd, solve_kkt(Mb, A2, Qb, -g2)[0])
@@ -222,26 +222,26 @@ def test_bad_arguments_raise():
     P = K.pack(m)
     q, V, nv, z = m.q0.copy(), m.V0.copy(), m.nv, np.zeros(m.n2)
     with pytest.raises(ValueError):
-        K.write(P.I, P.W, q[:-1], V, 0.0, z, z.copy())
+        K.write(P.T, P.off, P.w, q[:-1], V, 0.0, z, z.copy())
     with pytest.raises(ValueError):                         # more rows than packed
-        K.solve(P.I, P.W, P.empty, np.zeros((4, nv)), np.zeros(nv), np.zeros(4), np.zeros(nv))
+        K.solve(P.T, P.off, P.w, P.empty, np.zeros((4, nv)), np.zeros(nv), np.zeros(4), np.zeros(nv))
     with pytest.raises(ValueError):                         # constant M̄ packed: no room for a dense factor
-        K.solve(P.I, P.W, np.eye(nv), P.A0, np.zeros(nv), P.gam0, np.zeros(nv))
+        K.solve(P.T, P.off, P.w, np.eye(nv), P.A0, np.zeros(nv), P.gam0, np.zeros(nv))
     Pd = K.pack(ExudynModel(offset_com_pendulum()[1]))
     with pytest.raises(ValueError):                         # no constant M̄ packed
-        K.solve(Pd.I, Pd.W, Pd.empty, Pd.A0, np.zeros(nv), Pd.gam0, np.zeros(nv))
+        K.solve(Pd.T, Pd.off, Pd.w, Pd.empty, Pd.A0, np.zeros(nv), Pd.gam0, np.zeros(nv))
     with pytest.raises(ValueError):
-        K.forces(Pd.I, Pd.W, q, V, np.zeros(m.n2), Pd.empty, np.zeros(nv), Pd.empty)
+        K.forces(Pd.T, Pd.off, Pd.w, q, V, np.zeros(m.n2), Pd.empty, np.zeros(nv), Pd.empty)
     if not numba.config.DISABLE_JIT:
         with pytest.raises(TypeError):                      # explicit signatures: no new specializations
-            K.write(P.I, P.W, q.astype(np.float32), V, 0.0, z, z.copy())
+            K.write(P.T, P.off, P.w, q.astype(np.float32), V, 0.0, z, z.copy())
 
 
 def test_interpreted_kernels_give_the_same_f():
     """NUMBA_DISABLE_JIT=1 runs the same source as plain Python."""
     code = (
         "import sys, numpy as np\n"
-        "sys.path[:0] = ['tests', 'adapters']\n"
+        "sys.path[:0] = ['tests/models', 'adapters']\n"
         "import exudyn_models as em\n"
         "from lgt_exudyn.model import ExudynModel\n"
         "from lgt_exudyn import kernels as K\n"
@@ -251,7 +251,7 @@ def test_interpreted_kernels_give_the_same_f():
         "    a, b = K.f_compiled(m, P, q, V, 0.2), m.f(q, V, 0.2)\n"
         "    print(np.abs(a - b).max() / np.abs(b).max())\n")
     import os
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     out = run_python(f"import os; os.chdir({root!r})\n" + code, NUMBA_DISABLE_JIT="1")
     errs = [float(x) for x in out.split()]
     assert len(errs) == 2 and max(errs) < 1e-9

@@ -18,7 +18,7 @@ from lgt_bridge.errors import StepError
 from lgt_bridge.simulate import simulate
 
 HERE = Path(__file__).parent
-PENDULUM = HERE / "legacy" / "exudyn_pendulum.py"
+PENDULUM = HERE.parent / "models" / "legacy" / "exudyn_pendulum.py"
 
 
 def _cli(*args, env=None):

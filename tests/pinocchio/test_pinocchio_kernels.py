@@ -229,7 +229,7 @@ def test_bench_pinocchio_f_quick_writes_json_and_markdown(tmp_path):
     import importlib.util
     import json
     from pathlib import Path
-    script = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_pinocchio_f.py"
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_pinocchio_f.py"
     spec = importlib.util.spec_from_file_location("bench_pinocchio_f", script)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

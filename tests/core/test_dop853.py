@@ -1,7 +1,7 @@
 """DOP853 run as RKMK, and the dense output of dopri5 and dop853.
 
 References: the order conditions of the tableau; an independent plain-quaternion
-DOP853 solution at 1e-13 (tests/references.py); fitted slopes of error vs step."""
+DOP853 solution at 1e-13 (tests/models/references.py); fitted slopes of error vs step."""
 import numpy as np
 import pytest
 

@@ -1,0 +1,120 @@
+"""Exudyn access of :class:`lgt_exudyn.ExudynModel`: the evaluator (Exudyn's implicit solver
+object set up to write no files and no sensors), state writes, the algebraic equations'
+residual and Jacobian, and Exudyn's exceptions turned into ModelErrors."""
+import functools
+
+import numpy as np
+
+from lgt_bridge.errors import LGTError, ModelError
+
+
+def exudyn():
+    import exudyn
+    return exudyn
+
+
+def engine_error(sd, what, exc):
+    """The ModelError for an exception Exudyn raised while ``what`` evaluated the model (a
+    user function that failed, an evaluation Exudyn rejects), or None when ``exc`` is not
+    Exudyn's (a bug: it keeps its traceback). ``sd``: the system's data (for the time)."""
+    if not type(exc).__module__.startswith("exudyn"):
+        return None
+    text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
+    lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
+    msg = " ".join(lines) if lines else type(exc).__name__
+    if len(msg) > 300:
+        msg = msg[:300] + "..."
+    t = sd.GetTime()
+    return ModelError(f"Exudyn raised while lgt_bridge evaluated the model ({what}) at "
+                      f"t = {t:.9g}: {msg}. If a user function failed, "
+                      "fix it (run the script with Exudyn's own solver to see it in context).")
+
+
+def engine_call(method):
+    """Turn an exception Exudyn raises inside ``method`` (of an object with ``sd``) into a
+    ModelError naming the time and Exudyn's message (:func:`engine_error`); the original
+    stays chained (``--debug`` shows it)."""
+    @functools.wraps(method)
+    def call(self, *args):
+        try:
+            return method(self, *args)
+        except LGTError:
+            raise
+        except Exception as exc:
+            err = engine_error(self.sd, method.__name__, exc)
+            if err is None:
+                raise
+            raise err from exc
+    return call
+
+
+class Engine:
+    """An assembled system and its evaluator. ``ref``: Exudyn's reference ODE2 coordinates
+    (q, the bridge's, is reference + current); ``ae0``: the first AE row of Exudyn's
+    system vectors and Jacobian."""
+
+    def __init__(self, mbs):
+        exu = self.exu = exudyn()
+        self.mbs, self.sd = mbs, mbs.systemData
+        sd = self.sd
+        self.n2, self.nae = sd.ODE2Size(), sd.AEsize()
+        self.solver = exu.MainSolverImplicitSecondOrder()
+        s = self.settings = exu.SimulationSettings()
+        s.solution.file.write = False
+        s.solution.sensors.active = False
+        s.show.computationTime = False
+        s.show.statistics = False
+        # the bridge computes its own initial accelerations; Exudyn's would fail (with a
+        # warning) on redundant constraints
+        s.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+        self.solver.InitializeSolver(mbs, s)
+        self.ref = np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
+        self.ae0 = self.solver.GetODE2size() + self.solver.GetODE1size()
+        self.jac_zero = np.zeros((self.ae0 + self.nae, self.ae0 + self.nae))
+
+    def write(self, q, qd, t):
+        """Exudyn's state: coordinates q - ref, velocities qd, time t."""
+        sd = self.sd
+        sd.SetODE2Coordinates(q - self.ref)
+        sd.SetODE2Coordinates_t(qd)
+        sd.SetTime(t)
+
+    def mass_matrix(self):
+        """Exudyn's ODE2 mass matrix at the written state (a copy)."""
+        self.solver.ComputeMassMatrix(self.mbs)
+        return np.array(self.solver.GetSystemMassMatrix())
+
+    def ae_jacobian(self, c_pos=1.0, c_vel=1.0):
+        """Exudyn's AE Jacobian at the written state: c_pos ∂C/∂q + c_vel ∂C/∂q̇ (all AE
+        rows, n2 columns) and the AE-AE diagonal (1 on rows Exudyn keeps as λ = 0)."""
+        J = self.ae_jacobian_full(c_pos, c_vel)
+        a = self.ae0
+        return np.array(J[a:, :self.n2]), np.diagonal(J[a:, a:]).copy()
+
+    def ae_jacobian_full(self, c_pos, c_vel):
+        """Exudyn's whole system Jacobian (a view) holding c_pos ∂C/∂q + c_vel ∂C/∂q̇ on its AE
+        rows, at the written coordinates."""
+        S = self.solver
+        S.SetSystemJacobian(self.jac_zero)
+        S.ComputeJacobianAE(self.mbs, c_pos, c_vel, 0.0, False)
+        return S.GetSystemJacobian()
+
+    def ae_residual(self, q, qd, t, velocity_level, rows):
+        """Exudyn's algebraic equations' residual (``velocity_level``: their velocity form)
+        at (q, qd, t), AE rows ``rows``."""
+        self.write(q, qd, t)
+        self.solver.ComputeAlgebraicEquations(self.mbs, velocity_level)
+        return np.array(self.solver.GetSystemResidual())[self.ae0:][rows]
+
+    def ae_owners(self, rows):
+        """'object k 'name' (TypeName)' for each object owning one of the AE ``rows``."""
+        sd, names = self.sd, []
+        for k in range(sd.NumberOfObjects()):
+            try:
+                ltg = set(sd.GetObjectLTGAE(k))
+            except Exception:                       # objects without algebraic equations
+                continue
+            if ltg & set(rows):
+                o = self.mbs.GetObject(k)
+                names.append(f"object {k} {o.get('name', '')!r} ({o.get('objectType', '?')})")
+        return ", ".join(names) or "unknown objects"

@@ -1,0 +1,219 @@
+"""Exudyn's nodes as lgt_bridge's state layout, and the velocity maps between Exudyn's ODE2
+velocity coordinates and the bridge's twists.
+
+Each 3-D rigid node owns 6 entries of V, (ω body, ṙ inertial); every other ODE2 coordinate
+is a vector-space entry. Exudyn's velocity coordinates are q̇_e = H(q) V: EP nodes
+ṗ = ½ p ⊗ (0, ω); RotVecLG nodes (ṙ, ω); Rxyz nodes θ̇ = G(θ)⁻¹ ω. These numpy methods are
+the reference of the compiled kernels (:mod:`.kernel_maps`).
+"""
+import numpy as np
+
+from lgt_bridge import lgt as _lgt
+from lgt_bridge import params
+from lgt_bridge.errors import InputError
+from lgt_bridge.groups.batch import hat
+from lgt_bridge.model import Layout, RigidBody
+
+RIGID = {"RigidBodyEP": params.QUAT_WXYZ, "RigidBodyRotVecLG": params.ROTVEC,
+         "RigidBodyRxyz": params.RXYZ}
+#: node types whose ODE2 coordinates are a vector space (q̇ = v)
+VECTOR = ("Point", "Point2D", "RigidBody2D", "GenericODE2", "1D", "PointSlope1", "PointSlope12",
+          "PointSlope23", "Point2DSlope1", "Point3DSlope1", "Point3DSlope23")
+
+
+class NodeLayout:
+    """The ODE2 nodes of an assembled system: ``kinds`` (one ``(node type, q indices, first V
+    index)`` per rigid node), ``layout`` (lgt_bridge's), ``nv``, ``n2``, ``ep_ae`` (the AE
+    rows of the Euler-parameter normalizations), and the velocity maps H, H⁺, Ḣ V."""
+
+    def __init__(self, mbs):
+        sd = mbs.systemData
+        self.n2 = sd.ODE2Size()
+        bodies, vq, ep_ae, kinds = [], [], [], []
+        iv = 0
+        vidx_of_q = np.full(self.n2, -1)
+        for i in range(sd.NumberOfNodes()):
+            node = mbs.GetNode(i)
+            typ = node["nodeType"]
+            try:
+                idx = list(sd.GetNodeLTGODE2(i))
+            except Exception:                           # nodes without ODE2 coordinates
+                idx = []
+            if typ in RIGID:
+                bodies.append(RigidBody(RIGID[typ], tuple(idx[:3]), tuple(idx[3:]), tuple(range(iv, iv + 6)),
+                                        node.get("name", f"node{i}")))
+                kinds.append((typ, np.array(idx), iv))
+                iv += 6
+                if typ == "RigidBodyEP":
+                    ep_ae += list(sd.GetNodeLTGAE(i))
+            elif typ == "PointGround" or not len(idx):
+                continue                                       # no ODE2 coordinates
+            elif typ in VECTOR:
+                for k in idx:
+                    vq.append(k)
+                    vidx_of_q[k] = iv
+                    iv += 1
+            else:
+                raise InputError(f"Exudyn node {i} ({node.get('name', '')!r}) has type {typ!r}, which "
+                                 f"lgt_bridge does not support; supported rigid nodes: {sorted(RIGID)}, "
+                                 f"vector-space nodes: {list(VECTOR)}. Run this model with Exudyn's own "
+                                 "exu.SolveDynamic, or build it from supported nodes.")
+        self.kinds, self.ep_ae, self.nv = kinds, ep_ae, iv
+        self.layout = Layout(self.n2, iv, bodies, tuple(vq), tuple(vidx_of_q[vq]))
+        # per node type: q rows of position/rotation and V columns of ω/ṙ, batched
+        self.pos_q = np.array([k[1][:3] for k in kinds], int).reshape(-1, 3)
+        self.lin_v = np.array([k[2] + np.arange(3, 6) for k in kinds], int).reshape(-1, 3)
+        self.types, self.moving = {}, {}
+        for typ in RIGID:
+            sel = [k for k in kinds if k[0] == typ]
+            if sel:
+                self.types[typ] = (np.array([k[1][3:] for k in sel]), np.array([k[2] + np.arange(3) for k in sel]))
+                self.moving[typ] = (np.array([k[1] for k in sel]), np.array([k[2] + np.arange(6) for k in sel]))
+        self.vq = np.array(self.layout.vector_q, int)
+        self.vv = np.array(self.layout.vector_v, int)
+        self._tau = {}
+
+    def check_initial(self, q0, ref):
+        """InputError when a node's initial coordinates are not valid (Euler parameters: the
+        total of reference and initial coordinates must be a unit quaternion)."""
+        for (typ, _, _), b in zip(self.kinds, self.layout.bodies):
+            if typ == "RigidBodyEP":
+                _check_euler_parameters(b, q0, ref)
+            b.param.validate(q0[[*b.pos, *b.rot]], f"initial coordinates of Exudyn node '{b.name}'")
+
+    # ------------------------------------------------------------------ velocity maps
+    @staticmethod
+    def rot_blocks(typ, rot):
+        """d(rotation coordinates)/dt = B ω per node: (k, nrot, 3)."""
+        if typ == "RigidBodyEP":
+            p0, pv = rot[:, 0], rot[:, 1:]
+            B = np.empty((len(rot), 4, 3))
+            B[:, 0, :] = -0.5 * pv
+            B[:, 1:, :] = 0.5 * (p0[:, None, None] * np.eye(3) + hat(pv))
+            return B
+        if typ == "RigidBodyRxyz":
+            c1, s1 = np.cos(rot[:, 1]), np.sin(rot[:, 1])
+            c2, s2 = np.cos(rot[:, 2]), np.sin(rot[:, 2])
+            z, o = np.zeros_like(c1), np.ones_like(c1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.stack([c2 / c1, -s2 / c1, z, s2, c2, z, -s1 * c2 / c1, s1 * s2 / c1, o],
+                                axis=1).reshape(-1, 3, 3)
+        return np.broadcast_to(np.eye(3), (len(rot), 3, 3))
+
+    def H(self, q):
+        """Dense H(q) (n2 x nv): q̇_e = H V."""
+        H = np.zeros((self.n2, self.nv))
+        H[self.pos_q, self.lin_v] = 1.0
+        for typ, (rq, wv) in self.types.items():
+            H[rq[:, :, None], wv[:, None, :]] = self.rot_blocks(typ, q[rq])
+        H[self.vq, self.vv] = 1.0
+        return H
+
+    def H_pinv(self, q):
+        """The pseudo-inverse of H(q), block by block (H is a permutation of per-node
+        blocks: identities and each rotation's 4x3 or 3x3 block)."""
+        Hp = np.zeros((self.nv, self.n2))
+        Hp[self.lin_v, self.pos_q] = 1.0
+        for typ, (rq, wv) in self.types.items():
+            Hp[wv[:, :, None], rq[:, None, :]] = np.linalg.pinv(self.rot_blocks(typ, q[rq]))
+        Hp[self.vv, self.vq] = 1.0
+        return Hp
+
+    def rates_from_twist(self, q, V):
+        """Exudyn's ODE2 velocity coordinates q̇_e = H(q) V."""
+        qd = np.zeros(self.n2)
+        qd[self.pos_q] = V[self.lin_v]
+        for typ, (rq, wv) in self.types.items():
+            qd[rq] = np.einsum("nij,nj->ni", self.rot_blocks(typ, q[rq]), V[wv])
+        qd[self.vq] = V[self.vv]
+        return qd
+
+    def twist_from_rates(self, q, qd):
+        """The twists V of Exudyn's ODE2 velocity coordinates q̇_e (ω = G(θ) θ̇; q valid)."""
+        V = np.zeros(self.nv)
+        for (typ, idx, iv), b in zip(self.kinds, self.layout.bodies):
+            V[iv + 3:iv + 6] = qd[idx[:3]]
+            if typ == "RigidBodyRotVecLG":
+                V[iv:iv + 3] = qd[idx[3:]]
+            else:
+                V[iv:iv + 3] = b.param.G(q[idx[3:]]) @ qd[idx[3:]]
+        V[self.vv] = qd[self.vq]
+        return V
+
+    def Hdot_V(self, q, V):
+        """Ḣ(q, q̇) V: the part of q̈_e not from V̇."""
+        out = np.zeros(self.n2)
+        for typ, idx, iv in self.kinds:
+            w = V[iv:iv + 3]
+            if typ == "RigidBodyEP":
+                out[idx[3:]] = -0.25 * (w @ w) * q[idx[3:]]
+            elif typ == "RigidBodyRxyz":
+                th = q[idx[3:]]
+                a, bb, cc = self.rot_blocks(typ, th[None])[0] @ w           # θ̇ = G(θ)⁻¹ ω
+                c1, s1 = np.cos(th[1]), np.sin(th[1])
+                da = (-cc * bb + a * s1 * bb) / c1
+                db = cc * a * c1
+                dc = -c1 * bb * a - s1 * da
+                out[idx[3:]] = [da, db, dc]
+        return out
+
+    def Hplus_Hdot_V(self, q, V):
+        """H⁺ Ḣ V with H⁺ the left inverse of H (EP: 2G(p), which annihilates Ḣ V = -¼|ω|² p;
+        Rxyz: G(θ); identity elsewhere)."""
+        out = np.zeros(self.nv)
+        if "RigidBodyRxyz" in self.types:
+            hv = self.Hdot_V(q, V)
+            rq, wv = self.types["RigidBodyRxyz"]
+            th = q[rq]
+            c1, s1, c2, s2 = np.cos(th[:, 1]), np.sin(th[:, 1]), np.cos(th[:, 2]), np.sin(th[:, 2])
+            d = hv[rq]
+            out[wv] = np.stack([c1 * c2 * d[:, 0] + s2 * d[:, 1], -c1 * s2 * d[:, 0] + c2 * d[:, 1],
+                                s1 * d[:, 0] + d[:, 2]], axis=1)
+        return out
+
+    # ------------------------------------------------------------------ moving along twists
+    def tau(self, typ):
+        """The LGT map of a rigid node type on SO(3)xR³ with the exp chart."""
+        if typ not in self._tau:
+            self._tau[typ] = _lgt.LGT(RIGID[typ], "SO3xR3", "exp")
+        return self._tau[typ]
+
+    def moved(self, q, V, eps):
+        """q moved along the twist V by eps: τ on SO(3)xR³ (batched per node type),
+        additive for vector-space coordinates."""
+        out = q.copy()
+        for typ, (qi, vi) in self.moving.items():
+            out[qi] = self.tau(typ).tau(q[qi], eps * V[vi])
+        out[self.vq] = q[self.vq] + eps * V[self.vv]
+        return out
+
+    def plus(self, q0, D):
+        """q0 moved by D in Exudyn's own increments: plain addition, except RotVecLG
+        rotations, R = R0 exp(Dθ) (body frame)."""
+        q = q0 + D
+        if "RigidBodyRotVecLG" in self.moving:
+            qi, vi = self.moving["RigidBodyRotVecLG"]
+            tw = np.zeros(vi.shape)
+            tw[:, :3] = D[qi[:, 3:]]
+            tw[:, 3:] = D[qi[:, :3]]
+            q[qi] = self.tau("RigidBodyRotVecLG").tau(q0[qi], tw)
+        return q
+
+
+def _check_euler_parameters(b, q0, ref):
+    """InputError when a node's total Euler parameters (reference + initial: Exudyn adds
+    them component-wise) are not a unit quaternion, showing both parts."""
+    from lgt_bridge.validation import QUAT_NORM_TOL
+    rot = list(b.rot)
+    p, r = q0[rot], ref[rot]
+    norm = float(np.sqrt(p @ p))
+    if np.isfinite(norm) and abs(norm - 1.0) <= QUAT_NORM_TOL:
+        return
+    fmt = lambda a: "[" + ", ".join(f"{x:.6g}" for x in a) + "]"     # noqa: E731
+    raise InputError(
+        f"Exudyn node '{b.name}': its Euler parameters reference + initial coordinates = "
+        f"{fmt(r)} + {fmt(p - r)} = {fmt(p)} have norm {norm:.12g} (off by {abs(norm - 1.0):.3g} "
+        f"> {QUAT_NORM_TOL:g}). Exudyn adds referenceCoordinates and initialCoordinates component-"
+        "wise, so their sum must be a unit quaternion: put the rotation in referenceCoordinates "
+        "(or initialRotationMatrix of CreateRigidBody) and leave the initial rotation "
+        "coordinates at zero, or make the sum unit.")

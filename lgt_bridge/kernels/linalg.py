@@ -1,0 +1,61 @@
+"""Compiled dense linear algebra shared by the kernels: one Cholesky factorization and its
+solve, on flat row-major n x n blocks of a float64 array (a slice of a work array).
+
+A symmetric positive definite S may have a row envelope ``first`` (``first[i]``: the first
+nonzero column of row i of its lower triangle, which the factor keeps); an empty ``first``
+means dense. The factor overwrites S's lower triangle with L (S = L Lᵀ), with 1 / L_ii on
+the diagonal, so that both solves multiply. The numpy reference is ``np.linalg.cholesky``
+and ``np.linalg.solve``; tests hold them equal. Plain loops: ``NUMBA_DISABLE_JIT=1`` runs
+the same source interpreted.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from . import guard_cache
+
+guard_cache(__file__)
+
+
+@njit(cache=True, error_model="numpy")
+def cholesky(S, n, first):
+    """S (flat n x n, row-major) <- its Cholesky factor L in place (lower triangle, with
+    1 / L_ii on the diagonal; the upper triangle is not touched). Reads S's lower triangle
+    within the envelope ``first`` (empty: dense). Returns (ok, smallest, largest L_ii); not
+    ok, and S left part-factorized, when a pivot is not positive."""
+    dense = first.shape[0] == 0
+    dmin, dmax = np.inf, 0.0
+    for i in range(n):
+        fi = 0 if dense else first[i]
+        ri = n * i
+        for j in range(fi, i + 1):
+            rj = n * j
+            s = S[ri + j]
+            for k in range(fi if dense else max(fi, first[j]), j):
+                s -= S[ri + k] * S[rj + k]
+            if j < i:
+                S[ri + j] = s * S[rj + j]
+            elif s > 0.0:
+                d = math.sqrt(s)
+                dmin, dmax = min(dmin, d), max(dmax, d)
+                S[ri + i] = 1.0 / d
+            else:
+                return False, 0.0, dmax
+    return True, dmin, dmax
+
+
+@njit(cache=True, error_model="numpy")
+def cholesky_solve(L, n, first, x):
+    """x <- (L Lᵀ)⁻¹ x in place, L from :func:`cholesky` (same ``n`` and ``first``)."""
+    dense = first.shape[0] == 0
+    for i in range(n):                      # L y = x
+        s = x[i]
+        for k in range(0 if dense else first[i], i):
+            s -= L[n * i + k] * x[k]
+        x[i] = s * L[n * i + i]
+    for i in range(n - 1, -1, -1):          # Lᵀ x = y, column by column of Lᵀ (rows of L)
+        x[i] *= L[n * i + i]
+        xi = x[i]
+        for k in range(0 if dense else first[i], i):
+            x[k] -= L[n * i + k] * xi

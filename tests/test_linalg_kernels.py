@@ -1,0 +1,54 @@
+"""The compiled Cholesky factorization and solve shared by the kernels
+(lgt_bridge.kernels.linalg) against numpy: dense and with a row envelope, on a slice of a
+larger work array; a matrix that is not positive definite is reported, not factorized."""
+import numpy as np
+import pytest
+
+pytest.importorskip("numba")
+
+from lgt_bridge.kernels.linalg import cholesky, cholesky_solve  # noqa: E402
+
+from backend_checks import close  # noqa: E402
+
+
+def spd(rng, n):
+    B = rng.normal(size=(n, n))
+    return B @ B.T + n * np.eye(n)
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 12])
+def test_dense_factor_and_solve_equal_numpy(n, rng):
+    S = spd(rng, n)
+    b = rng.normal(size=n)
+    w = np.zeros(3 + n * n + n)                  # the factor and x as slices of a work array
+    w[3:3 + n * n] = S.ravel()
+    w[3 + n * n:] = b
+    dense = np.zeros(0, np.int64)
+    ok, dmin, dmax = cholesky(w[3:3 + n * n], n, dense)
+    L = np.linalg.cholesky(S)
+    assert ok and close(dmin, np.diag(L).min()) and close(dmax, np.diag(L).max())
+    F = w[3:3 + n * n].reshape(n, n)
+    assert close(np.tril(F, -1), np.tril(L, -1)) and close(np.diag(F), 1.0 / np.diag(L))
+    cholesky_solve(w[3:3 + n * n], n, dense, w[3 + n * n:])
+    assert close(w[3 + n * n:], np.linalg.solve(S, b))
+
+
+def test_envelope_factor_equals_dense(rng):
+    """A banded S: rows start at their envelope; the factor keeps it."""
+    n, first = 9, np.array([0, 0, 0, 1, 1, 3, 3, 5, 6], np.int64)
+    S = spd(rng, n)
+    for i in range(n):
+        S[i, :first[i]] = S[:first[i], i] = 0.0
+    S += 3 * n * np.eye(n)
+    x, flat = rng.normal(size=n), S.ravel().copy()
+    want = np.linalg.solve(S, x)
+    assert cholesky(flat, n, first)[0]
+    cholesky_solve(flat, n, first, x)
+    assert close(x, want)
+
+
+def test_not_positive_definite_is_reported(rng):
+    S = spd(rng, 4)
+    S[2, 2] = -1.0
+    ok, dmin, dmax = cholesky(S.ravel().copy(), 4, np.zeros(0, np.int64))
+    assert not ok and dmin == 0.0
