@@ -1,7 +1,8 @@
 """Events (issue 24): zero crossings of g(t, q, V) located on the step's continuous extension
 through τ, against independent references: the complete elliptic integral (pendulum period),
 free fall (√(2h/g)), scipy's solve_ivp on the same ODE in vector form (direction, terminal,
-order, count), the convergence order of the fixed-step Hermite location, and the engines."""
+order, count), the convergence order of the fixed-step Hermite location. The engines' events:
+tests/exudyn/test_exudyn_events.py, tests/pinocchio/test_pinocchio_events.py."""
 import math
 
 import mpmath
@@ -18,11 +19,6 @@ from lgt_bridge.scenes.system import RigidBodySystem
 G = 9.81
 J_COM = np.diag([0.05, 0.08, 0.03])
 MASS, D = 2.0, 0.6
-
-
-def Ry(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
 def pendulum(theta0, constrained=False):
@@ -372,56 +368,3 @@ def test_events_add_no_f_evaluations_to_steps_without_crossings():
         b = simulate(m, (0.0, 1.0), method=method, events=[lambda t, q, V: 1.0], **kw)
         assert a.stats["n_f"] == b.stats["n_f"] and np.array_equal(a.q, b.q)
         assert a.t_events is None and len(b.t_events[0]) == 0
-
-
-# --------------------------------------------------------------------------- engines
-def test_exudyn_revolute_pendulum_period():
-    exu = pytest.importorskip("exudyn")
-    from exudyn.utilities import InertiaCuboid, ObjectGround
-
-    import lgt_bridge
-    theta0, rho, sides = 2.2, 500.0, [0.1, 0.1, 1.2]
-    d = sides[2] / 2
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    ground = mbs.AddObject(ObjectGround())
-    inertia = InertiaCuboid(density=rho, sideLengths=sides)
-    R0 = Ry(theta0)
-    body = mbs.CreateRigidBody(inertia=inertia, referencePosition=R0 @ [0, 0, -d], referenceRotationMatrix=R0,
-                               gravity=[0, 0, -G])
-    mbs.CreateRevoluteJoint(itemNumbers=[ground, body], position=[0, 0, 0], axis=[0, 1, 0])
-    mbs.Assemble()
-    m = lgt_bridge.wrap(mbs)
-    mass = rho * np.prod(sides)
-    I_pivot = mass * (sides[0] ** 2 + sides[2] ** 2) / 12 + mass * d * d
-    T = period(theta0, I_pivot / (mass * d))
-    r = simulate(m, (0.0, 1.3 * T), method="dop853", rtol=1e-12, atol=1e-12,
-                 events=[lambda t, q, V: q[0]])          # x of the body's centre (Exudyn's own q)
-    te = r.t_events[0]
-    assert len(te) == 3
-    assert abs(te[0] - T / 4) / T < 1e-9 and abs(te[2] - te[0] - T) / T < 1e-9
-
-
-def test_pinocchio_frame_touches_ground():
-    pin = pytest.importorskip("pinocchio")
-    from lgt_pinocchio import PinocchioModel
-
-    model = pin.Model()
-    j = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
-    model.appendBodyToJoint(j, pin.Inertia(1.5, np.zeros(3), np.diag([0.1, 0.2, 0.3])), pin.SE3.Identity())
-    foot = model.addFrame(pin.Frame("foot", j, 0, pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.2])),
-                                    pin.FrameType.OP_FRAME))
-    data = model.createData()
-    h = 1.0
-    q0 = pin.neutral(model)
-    q0[2] = h + 0.2                                      # the foot starts at height h
-    m = PinocchioModel(model, q0=q0, v0=np.zeros(6))
-
-    def foot_z(t, q, V):                                 # g calls the engine
-        qp, _ = m.pin_state(q, V)
-        pin.framesForwardKinematics(model, data, qp)
-        return data.oMf[foot].translation[2]
-    foot_z.terminal = True
-    r = simulate(m, (0.0, 1.0), method="dop853", rtol=1e-12, atol=1e-12, events=[foot_z])
-    assert r.success and abs(r.t_events[0][0] - math.sqrt(2 * h / 9.81)) < 1e-12
-    assert abs(foot_z(0, r.q[-1], r.V[-1])) < 1e-12
