@@ -5,7 +5,8 @@ An event function is ``g(t, q, V) -> float`` in the model's own coordinates (q a
 engine stores it, V = (ω body, ṙ inertial) per body), with scipy's attributes:
 
 - ``g.terminal``: False/0 (default), True (= 1) or a count n: the run ends at the n-th
-  occurrence of this event, at the located time, with the model written back there;
+  occurrence of this event, at the located time, with the model written back there (a later
+  ``Simulation.run`` continues from there and does not find that crossing again);
 - ``g.direction``: 0 (default, both), > 0 (only g going from negative to positive), < 0;
 - ``g.interp_points`` (ours, default 0): besides the step ends, g is tested at this many equally
   spaced interior times of every step on its continuous extension, so that two crossings
@@ -219,6 +220,13 @@ class Tracker:
         t, q, V = sim.t, st.q, st.V
         self.g = [s.value(t, q, V, initial=True) for s in self.specs]
         self.sigma = [_sign(x) for x in self.g]      # the sign of g's last nonzero value
+        # a run that continues from a terminal event: that event's g is (about) zero here and
+        # has crossed to the other side; it is not found again at the start
+        te, fn, side = getattr(sim, "_event_resume", (None, None, 0))
+        if te == t:
+            for i, s in enumerate(self.specs):
+                if s.fn is fn:
+                    self.sigma[i] = side
         self.interp = max(s.interp_points for s in self.specs)
         self._keep = getattr(st, "keep_dense", None) is False   # dense output on request (scipy's)
         if self._keep:
@@ -319,7 +327,7 @@ class Tracker:
                     if sigma and sk != sigma:
                         if s.direction == 0 or s.direction == sk:
                             te = self._locate(s, state, times[k - 1], times[k], vals[k - 1], vals[k], xtol)
-                            found.append((te, i))
+                            found.append((te, i, sk))
                     sigma = sk
                 self.sigma[i] = sigma
         else:
@@ -328,23 +336,24 @@ class Tracker:
                     self.sigma[i] = _sign(x)
         self.g = gb
         stop = None
-        for te, i in sorted(found):
+        for te, i, side in sorted(found):
             qe, Ve = state(te)
             self.t_events[i].append(te)
             self.q_events[i].append(np.array(qe, float))
             self.V_events[i].append(np.array(Ve, float))
             self.count[i] += 1
             if self.count[i] >= self.specs[i].max_count:
-                stop = (te, i, qe, Ve)
+                stop = (te, i, qe, Ve, side)
                 break
         if stop is None:
             self._start(t, q, V, self._Wd_end)
             return
-        te, i, qe, Ve = stop
+        te, i, qe, Ve, side = stop
         qe, Ve = np.array(qe, float), np.array(Ve, float)
         sim = self.sim
         st.set_state(qe, Ve)
         sim.t = te
+        sim._event_resume = (te, self.specs[i].fn, side)
         sim.model.write_back(qe, Ve, te)
         s = self.specs[i]
         nth = "" if s.max_count == 1 else f" (occurrence {self.count[i]})"

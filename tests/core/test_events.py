@@ -294,6 +294,21 @@ def test_terminal_event_writes_back_and_the_run_continues(method, kw):
     assert abs(r2.q[-1, 2] - (2.0 - G * (te + 0.1) ** 2 / 2)) < (1e-3 if method == "genalpha" else 1e-6)
 
 
+def test_a_run_continued_from_a_terminal_event_does_not_find_it_again():
+    """Stop at each pass of the pendulum through the vertical and continue with the same
+    event: every pass once, none at the start of the next run (g there is a rounding-level
+    number of either sign)."""
+    m, L = pendulum(2.5)
+    T = period(2.5, L)
+    g = event(com_x(False), terminal=True)
+    sim = Simulation(m, method="dop853", rtol=1e-12, atol=1e-12, t_end=1.6 * T)
+    passes = []
+    while sim.t < 1.6 * T:
+        r = sim.run(1.6 * T, events=[g])
+        passes += list(r.t_events[0])
+    np.testing.assert_allclose(passes, T / 4 + np.arange(3) * T / 2, rtol=1e-10)
+
+
 def test_terminal_count():
     m, L = pendulum(2.5)
     T = period(2.5, L)
