@@ -196,6 +196,19 @@ def test_event_at_t0_is_not_reported():
     np.testing.assert_allclose(r.t_events[0], [4.0 / G], atol=1e-12)
 
 
+def test_exact_zero_at_a_step_end_is_reported_once():
+    """g = t - 0.5 is exactly zero at the end of the fourth step of 0.125 s: one event there
+    (decided by the next step's sign), found by both directions' rules; a touch (t - 0.5)²
+    that does not change sign is no crossing."""
+    body = falling_body()
+    evs = [lambda t, q, V: t - 0.5, event(lambda t, q, V: t - 0.5, direction=1),
+           event(lambda t, q, V: t - 0.5, direction=-1), lambda t, q, V: (t - 0.5) ** 2]
+    r = simulate(body, (0.0, 1.0), method="rkmk4", dt=0.125, events=evs)
+    assert 0.5 in r.t
+    assert [list(te) for te in r.t_events] == [[0.5], [0.5], [], []]
+    np.testing.assert_array_equal(r.q_events[0][0], r.q[list(r.t).index(0.5)])
+
+
 # --------------------------------------------------------------------------- fixed-step order
 def test_rkmk4_location_order_four():
     theta0 = 2.5
