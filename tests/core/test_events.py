@@ -397,3 +397,11 @@ def test_events_add_no_f_evaluations_to_steps_without_crossings():
         b = simulate(m, (0.0, 1.0), method=method, events=[lambda t, q, V: 1.0], **kw)
         assert a.stats["n_f"] == b.stats["n_f"] and np.array_equal(a.q, b.q)
         assert a.t_events is None and len(b.t_events[0]) == 0
+
+
+def test_example_pendulum_period_runs(capsys):
+    import runpy
+    from pathlib import Path
+    runpy.run_path(str(Path(__file__).resolve().parents[2] / "examples" / "events_pendulum_period.py"))
+    out = capsys.readouterr().out
+    assert "dop853 rtol = atol = 1e-13  11 passes" in out

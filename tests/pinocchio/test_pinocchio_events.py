@@ -32,3 +32,13 @@ def test_pinocchio_frame_touches_ground():
     r = simulate(m, (0.0, 1.0), method="dop853", rtol=1e-12, atol=1e-12, events=[foot_z])
     assert r.success and abs(r.t_events[0][0] - math.sqrt(2 * h / 9.81)) < 1e-12
     assert abs(foot_z(0, r.q[-1], r.V[-1])) < 1e-12
+
+
+def test_example_quadruped_drop_runs(capsys):
+    """examples/events_quadruped_drop.py: Solo-12 stops at its first touchdown, the foot on z = 0."""
+    pytest.importorskip("example_robot_data", reason="the robots extra (example-robot-data) is not installed")
+    import runpy
+    from pathlib import Path
+    runpy.run_path(str(Path(__file__).resolve().parents[2] / "examples" / "events_quadruped_drop.py"))
+    out = capsys.readouterr().out
+    assert "terminal event 1 (FR_FOOT touches the ground) at t = 0.2383874" in out
