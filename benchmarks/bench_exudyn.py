@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "models"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import exudyn as exu  # noqa: E402

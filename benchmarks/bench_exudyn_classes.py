@@ -15,7 +15,8 @@ import sys
 import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "models"))
+_TESTS = Path(__file__).resolve().parents[1] / "tests"
+sys.path[:0] = [str(_TESTS / "models"), str(_TESTS / "exudyn")]     # the test models and their cases
 
 import exudyn_joint_models as jm  # noqa: E402
 import exudyn_special_models as sm  # noqa: E402

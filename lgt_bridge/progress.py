@@ -23,13 +23,12 @@ _MAX_STRIDE = 4096
 def mode(progress, stream=None):
     """"on", "auto" or None (off) for a ``progress`` argument."""
     if progress is None:
-        if os.environ.get("CI"):
-            return None
         stream = sys.stderr if stream is None else stream
         try:
-            return "auto" if stream.isatty() else None
+            tty = stream.isatty()
         except (AttributeError, ValueError):
             return None
+        return "auto" if tty and not os.environ.get("CI") else None
     return "on" if progress else None
 
 

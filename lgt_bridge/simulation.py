@@ -50,7 +50,8 @@ def _note_initial_projection(rep, t0):
         f"the initial state at t = {t0:g} violates the constraints (positions by "
         f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
         f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
-        f"{rep['velocity']:.3g} (as Exudyn's implicit solver does in its first step). Make the "
+        f"{rep['velocity']:.3g} (the model's own rule where it has one: Exudyn's first implicit step, "
+        "Pinocchio's loop closure). Make the "
         "initial state consistent to silence this note."), stacklevel=5)
 
 
@@ -219,7 +220,15 @@ class Simulation:
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated
         within the last step when the method has dense output). A failed step raises
-        :class:`~.integrators.base.StepFailed` with the model at the last good step."""
+        :class:`~.errors.StepError` (:class:`~.errors.ModelError` when the engine raised,
+        :class:`~.errors.ChartDomainError` for a fixed step beyond its chart's domain), the
+        stepper at the last good step (``q``, ``V``, ``t``)."""
+        try:
+            return self._advance_to(target, on_step)
+        except StepFailed as exc:
+            raise exc.error(str(exc)) from None
+
+    def _advance_to(self, target, on_step=None):
         st = self.stepper
         if not self.dense:
             while self.t < target:
@@ -267,11 +276,11 @@ class Simulation:
         hook = on_step if tracker is None else tracker.hook(on_step)
         try:
             for target in targets:
-                q_out, V_out = self.advance_to(target, hook)
+                q_out, V_out = self._advance_to(target, hook)
                 if not record_all:
                     ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
             if self.t < t1:
-                self.advance_to(t1, hook)
+                self._advance_to(t1, hook)
         except _events.Terminal as stop:      # the run ends at the event (the state moved there)
             last = ts[-1] if ts else -np.inf
             for t in ([stop.t] if record_all else [t for t in targets if last < t <= stop.t]):

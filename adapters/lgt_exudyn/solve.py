@@ -10,9 +10,8 @@ needs, and interpolate Exudyn's output steps with their dense output.
 import sys
 import time
 
-from lgt_bridge.errors import InputError, StepError
+from lgt_bridge.errors import InputError, LGTError, StepError
 from lgt_bridge.integrators import registry
-from lgt_bridge.integrators.base import StepFailed
 from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
@@ -31,7 +30,7 @@ def _note_once(key, text):
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
                  method="dopri5", group="SE3", chart="exp", rtol=None, atol=None, rho_inf=0.9,
-                 project=True, verbose=None, accelerations=True, progress=None):
+                 project=True, verbose=None, accelerations=None, progress=None):
     """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
     ignored), integrated by the bridge with ``method``/``group``/``chart``.
 
@@ -56,10 +55,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     automaticStepSize: 1e-6/1e-8). ``group``/``chart`` may be "auto" as in
     :func:`lgt_bridge.simulate`. ``progress``: a tqdm bar on stderr as in ``simulate``
     (None: only for runs longer than about 1 s on a terminal, never in CI; True/False force
-    it). Returns True, and leaves the final state in the system (``accelerations``: also the
-    engine's accelerations after each output step, one more f evaluation each, for the
-    solution file and acceleration sensors). A failed step raises StepError with the system
-    at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
+    it). Returns True, and leaves the final state in the system, its accelerations included.
+    ``accelerations``: also write the engine's accelerations after each output step (one
+    more f evaluation each); None (default): only when an output reads them (the solution
+    file with accelerations exported, acceleration sensors, or sensors of objects, loads
+    and user functions, which may read forces). A failed step raises StepError with the
+    system at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
     """
     import exudyn as exu
     if simulationSettings is None:
@@ -137,16 +138,19 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             sim.restart()
         try:
             q_out, V_out = sim.advance_to(ts + h, on_step)
-        except StepFailed as exc:
+        except LGTError as exc:           # a failed step: the simulation is at the last good one
             failure.append(str(exc))
             model.write_back(stepper.q, stepper.V, sim.t)
             solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
             return True
         model.write_back(q_out, V_out, ts + h)
-        if accelerations:      # Exudyn's solution file and acceleration sensors read them
+        if accelerations or (ts + h >= t1 - 1e-12 * max(1.0, abs(t1))):
+            # the outputs that read them, and the final state
             sd.SetODE2Coordinates_tt(model.accelerations(q_out, V_out, ts + h))
         return True
 
+    if accelerations is None:
+        accelerations = _outputs_read_accelerations(mbs, simulationSettings)
     solver = exu.MainSolverImplicitSecondOrder()
     solver.SetUserFunctionNewton(mbs, newton)
     saved = [(ti, "automaticStepSize", auto_step)]
@@ -187,6 +191,26 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), exu.ConfigurationType.Initial)
     return True
+
+
+#: sensors that read only positions, velocities and rotations of what they name (unless
+#: their output variable is an acceleration)
+_KINEMATIC_SENSORS = ("Node", "Marker", "Body")
+
+
+def _outputs_read_accelerations(mbs, settings):
+    """Whether an output reads the engine's accelerations between steps: the solution file
+    with accelerations exported, a sensor of an acceleration, or a sensor of an object, load,
+    superelement or user function (which may read forces)."""
+    sol = settings.solution
+    if sol.file.write and sol.file.export.accelerations:
+        return True
+    for i in range(mbs.systemData.NumberOfSensors()):
+        sensor = mbs.GetSensor(i)
+        kind = sensor.get("outputVariableType")
+        if "Acceleration" in getattr(kind, "name", str(kind)) or sensor.get("sensorType") not in _KINEMATIC_SENSORS:
+            return True
+    return False
 
 
 def _has_user_function(mbs, getter):

@@ -10,19 +10,27 @@ torques (size nv) from Pinocchio's own q and v, the same callable
 import numpy as np
 import pinocchio as pin
 from scipy.integrate import solve_ivp
-from scipy.spatial.transform import Rotation
 
 
 def root_R(q):
-    return Rotation.from_quat(q[3:7] / np.linalg.norm(q[3:7])).as_matrix()    # x y z w
+    """The free-flyer root's rotation matrix (Pinocchio's own quaternion, x y z w stored)."""
+    return pin.Quaternion(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix()
 
 
 def qdot(model, q, v):
-    """Time derivative of Pinocchio's q for a free-flyer root + nq = nv joints."""
-    p = np.array([q[6], q[3], q[4], q[5]])
-    w, vl = v[3:6], v[:3]
-    pd = 0.5 * np.concatenate([[-p[1:] @ w], p[0] * w + np.cross(p[1:], w)])
-    return np.concatenate([root_R(q) @ vl, pd[1:], [pd[0]], v[6:]])
+    """Time derivative of Pinocchio's q for a free-flyer root + nq = nv joints, written as
+    fast as a user would: Pinocchio's quaternion for R, the quaternion rate ½ p ⊗ (0, ω)
+    by hand (a scipy ``Rotation`` per call costs 28 µs against 4.7 µs)."""
+    x, y, z, w = q[3], q[4], q[5], q[6]
+    wx, wy, wz = v[3], v[4], v[5]
+    out = np.empty(len(q))
+    out[:3] = root_R(q) @ v[:3]
+    out[3] = 0.5 * (w * wx + y * wz - z * wy)
+    out[4] = 0.5 * (w * wy + z * wx - x * wz)
+    out[5] = 0.5 * (w * wz + x * wy - y * wx)
+    out[6] = -0.5 * (x * wx + y * wy + z * wz)
+    out[7:] = v[6:]
+    return out
 
 
 class Counter:

@@ -29,7 +29,7 @@ def iteration_parts(m, q, V, t, lam=None, Vdot=None):
         # Tᵀ r + Aᵀλ = 0 with T orthogonal: r = -T Aᵀλ, a = aba(u - T Aᵀλ)
         a = np.array(pin.aba(model, d, q, v, u - T @ (m.constraint_jacobian(q).T @ np.asarray(lam, float))))
     elif nc:
-        a = np.array(m.cons.dynamics(q, v, m.loads.torques(t, q, v)))
+        a = np.array(m.cons.dynamics(q, v, u))
     else:
         a = np.array(pin.aba(model, d, q, v, u))
         residual = False

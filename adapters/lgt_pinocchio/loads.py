@@ -46,6 +46,7 @@ class Loads:
                 raise InputError(f"tau: expected a finite vector of size nv = {self.nv} or a callable "
                                  f"tau(t, q, v), got shape {tau.shape}.")
         self.tau, self.fext, self.tau_derivatives = tau, fext, tau_derivatives
+        self._data = model.createData() if fext is not None else None     # fext's joint torques
 
     def check(self, q0, v0):
         """Call each load once at the initial state, so a wrong one fails before any step."""
@@ -107,14 +108,20 @@ class Loads:
                              "tangent coordinates, dtau_dv).")
         return dq, dv
 
-    def generalized(self, t, q, v, data):
-        """u(t, q, v): tau plus the joint torques of fext (Jᵀ f = rnea(q, v, 0) - rnea(q, v, 0,
-        fext), on Pinocchio's ``data``)."""
+    def joint_torques(self, t, q, v, data=None):
+        """The joint torques of fext: Σ_j J_jᵀ f_j (J_j the LOCAL Jacobian of joint j, f_j in its
+        frame) = rnea(q, v, 0) - rnea(q, v, 0, fext), on Pinocchio's ``data`` (default: the
+        loads' own). How constraintDynamics, which takes no fext, gets the external forces."""
+        pin = self.pin
+        d = self._data if data is None else data
+        z = np.zeros(self.nv)
+        return pin.rnea(self.model, d, q, v, z) - pin.rnea(self.model, d, q, v, z, self.forces(t, q, v))
+
+    def generalized(self, t, q, v, data=None):
+        """u(t, q, v): tau plus the joint torques of fext (:meth:`joint_torques`)."""
         u = np.array(self.torques(t, q, v), float)
         if self.fext is not None:
-            pin = self.pin
-            z = np.zeros(self.nv)
-            u += pin.rnea(self.model, data, q, v, z) - pin.rnea(self.model, data, q, v, z, self.forces(t, q, v))
+            u += self.joint_torques(t, q, v, data)
         return u
 
     def derivatives(self, t, q, v, u0, data):

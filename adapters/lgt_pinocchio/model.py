@@ -7,8 +7,10 @@ q is Pinocchio's own configuration vector; V holds the bridge's twists. The mode
   rotation of a planar joint) and vector-space blocks, i.e. the bridge's Layout, and the maps
   between Pinocchio's v and V (v = T(q) V);
 * :mod:`.loads` — the user's tau, tau_derivatives and fext, checked and converted;
-* :mod:`.constraints` — RigidConstraintModels: f from constraintDynamics, g, A from
-  Pinocchio's frame Jacobians and γ from its frame accelerations;
+* :mod:`.constraints` — RigidConstraintModels (and Pinocchio 4's point and frame anchors): f from
+  constraintDynamics, g, A from Pinocchio's frame Jacobians and γ from its frame accelerations;
+  default anchors, redundant rows, unclosed loops (:meth:`PinocchioModel.project_initial`) and
+  passages near singular configurations (:meth:`PinocchioModel.write_back`);
 * :mod:`.rhs` — f(q, V, t) = Pinocchio's ABA (constraintDynamics with constraints), with
   r̈ = R (a_lin + ω × v_lin) for the roots, on either backend;
 * :mod:`.iteration` — generalized-α's Newton matrix from Pinocchio's analytic RNEA derivatives.
@@ -17,13 +19,15 @@ Backends (:mod:`lgt_bridge.backend`, read once when the model is built: ``backen
 numba, f converts V to Pinocchio's v and ABA's a to V̇ by two compiled calls
 (:mod:`.kernels`) over a preallocated v; with numpy it runs the readable reference.
 """
+import warnings
+
 import numpy as np
 
 from lgt_bridge import backend as _backend
-from lgt_bridge.errors import InputError
+from lgt_bridge.errors import InputError, ModelNote
 from lgt_bridge.model import Model, combine_iteration
 
-from .constraints import Constraints, gamma_fd, jacobian_fd
+from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, jacobian_fd
 from .iteration import iteration_parts
 from .joints import Joints
 from .loads import Loads
@@ -35,7 +39,33 @@ def _pin():
     return pinocchio
 
 
+#: smallest singular value of the constraint Jacobian A (twist coordinates), relative to its largest,
+#: below which a configuration counts as near-singular (assembly branches may meet there)
+SINGULAR_TOL = 1e-3
+#: jump of V over a step, beyond the trapezoidal rule's prediction, relative to |V|, that counts
+#: as a switch of assembly branch (a smooth passage changes V by h f)
+BRANCH_JUMP_TOL = 1e-3
+
+
+#: the oldest Pinocchio the adapter runs on (tested: 3.3.1, 3.9.0, 4.1.0)
+MIN_PIN = (3, 0)
+
+
+def _check_pin_version(pin):
+    """InputError on a Pinocchio older than MIN_PIN (2.x has other constraint classes and
+    constructors), before anything is built."""
+    version = getattr(pin, "__version__", "0")
+    try:
+        found = tuple(int(x) for x in version.split(".")[:2])
+    except ValueError:
+        return
+    if found < MIN_PIN:
+        raise InputError(f"lgt_pinocchio needs Pinocchio >= {'.'.join(map(str, MIN_PIN))}; this is Pinocchio "
+                         f"{version}. Upgrade it: pip install 'pin>=3' (or 'lgt-bridge[pinocchio]').")
+
+
 def _check_pin_model(pin, model):
+    _check_pin_version(pin)
     if isinstance(model, pin.Model):
         return
     if isinstance(model, pin.Data):
@@ -74,8 +104,22 @@ class PinocchioModel(Model):
     fext: None or ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector
     (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame (a
     ``pinocchio.StdVec_Force`` is passed on without conversion: the cheapest form).
-    constraints: ``pinocchio.RigidConstraintModel`` objects (3-D/6-D, to the world or loop closures).
+    constraints: ``pinocchio.RigidConstraintModel`` objects (3-D/6-D, to the world or loop
+    closures; Pinocchio 3 or 4) and, on Pinocchio 4, ``PointAnchorConstraintModel`` and
+    ``FrameAnchorConstraintModel`` (also inside a ``ConstraintModel``). They are copied when the
+    model is wrapped: changing one afterwards does not change this model (wrap it again).
+    Unilateral, friction and joint-limit constraints are refused, naming the class and why. As
+    Pinocchio means them: a constraint to the world left at the default identity placement
+    (``RigidConstraintModel(type, model, joint1_id, placement)``) holds its frame where it is
+    at q0; a loop not closed at q0 is projected onto closure before the first step
+    (:meth:`project_initial`; ``result.stats["initial_projection"]`` says how far), and refused
+    when that fails; rows redundant at q0 are set aside (``redundant_rows``, a ModelNote).
+    prox_settings: the ``pinocchio.ProximalSettings`` constraintDynamics uses (default:
+    ``ProximalSettings(1e-12, 1e-12, 50)``: accuracy, mu, max_iter).
     q0, v0: initial state in Pinocchio's own coordinates (default: neutral, zero).
+    After a run: ``branch_switches`` and ``singular_passages``, the (start, end) times of the
+    passages near a singular configuration of the constraints in which the solution switched
+    assembly branch or stayed on it (each also a ModelNote; :meth:`write_back`).
     backend: 'numba' or 'numpy' (default: $LGT_BRIDGE_BACKEND, else numba).
 
     With the compiled backend, ``tau`` and ``fext`` receive the caller's q and the model's
@@ -84,7 +128,7 @@ class PinocchioModel(Model):
     """
 
     def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None,
-                 tau_derivatives=None):
+                 tau_derivatives=None, prox_settings=None):
         pin = self.pin = _pin()
         _check_pin_model(pin, model)
         self.backend = _backend.name(backend)
@@ -98,9 +142,14 @@ class PinocchioModel(Model):
         self.loads = Loads(pin, model, tau, fext, tau_derivatives)
         self.q0, v0 = _initial_state(self.joints, pin, model, q0, v0)
         self.V0 = self.twist_from_v(self.q0, v0)
-        self.cons = Constraints(pin, model, self.data, self.joints, constraints or [], fext)
+        # write_back's watch of singular configurations: times, the passage under way, the last step
+        self.branch_switches, self.singular_passages, self._branch, self._last = [], [], None, None
+        self._A_last = None
+        self.cons = Constraints(pin, model, self.data, self.joints, [] if constraints is None else constraints,
+                                self.q0, prox_settings)
         self.n_constraints = self.cons.n
-        self.cons.check(self.q0)
+        if self.n_constraints:
+            self._rank_constraints()
         if self.compiled:
             from . import kernels
             self._kernels = kernels
@@ -109,6 +158,97 @@ class PinocchioModel(Model):
             self.f = self._f_compiled = build_f(self, kernels)
             self.f.__doc__ = PinocchioModel.f.__doc__
         self.loads.check(self.q0, v0)          # a wrong tau or fext fails before any step
+
+    def _rank_constraints(self):
+        """Set aside the constraint rows that are redundant at q0 (at its projection onto the
+        constraints when q0 does not close them: refused when that fails)."""
+        q = self.q0
+        if np.abs(self.cons.residual_all(q)).max() > CLOSED_TOL:
+            q = self._closed(self.q0, self.V0, 0.0)[0]
+        self.cons.set_rows(independent_rows(self.cons.jacobian_all(q)))
+        self.n_constraints = self.cons.n
+        self._A_last = None                      # the projection's A had every row
+
+    def _closed(self, q0, V0, t0):
+        """The core's projection of (q0, V0) onto the constraints (:func:`project_initial`), or
+        InputError naming the constraint it could not close."""
+        from lgt_bridge.integrators.constraints import project_initial
+        with np.errstate(all="ignore"):
+            try:
+                q, V, rep = project_initial(self, q0, V0, t0)
+            except np.linalg.LinAlgError as exc:
+                q, V, rep = q0, V0, {"position_residual_after": np.inf, "error": str(exc)}
+        if rep is None:
+            return q, V, rep
+        g = self.cons.residual_all(q)
+        if not np.isfinite(q).all() or not np.abs(g).max() <= 1e-9:
+            g0 = self.cons.residual_all(q0)
+            k = int(np.argmax(np.abs(g0)))
+            raise InputError(
+                f"constraint residual {k} of {self.cons._owner(k)} is {g0[k]:.3g} at q0 and the projection onto "
+                f"the constraints failed (residual {np.abs(g).max() if np.isfinite(g).all() else np.inf:.3g} "
+                "after it): the constraint frames cannot be brought together from this configuration. "
+                "Check joint1/joint2 placements, or start from a configuration that closes the loop.")
+        return q, V, rep
+
+    def project_initial(self, q0, V0, t0):
+        """(q, V, report): the initial state moved onto the constraints (a loop not closed at q0,
+        as Pinocchio's examples start it; velocities onto A V = 0) by the core's projection;
+        ``report`` None when it was consistent. InputError when the projection fails."""
+        self._branch = self._last = None
+        self.branch_switches, self.singular_passages = [], []        # of this run
+        return self._closed(q0, V0, t0)
+
+    def write_back(self, q, V, t):
+        """After each step of a constrained run: watch for passages near a singular configuration
+        of the constraints (A's smallest singular value below SINGULAR_TOL of its largest), where
+        assembly branches meet and a numerical solution can leave its branch (a four-bar at its
+        collinear configuration). Through such a passage the velocity change
+        is checked against the smooth motion's, Σ (V_{k+1} - V_k - h (f_k + f_{k+1})/2); when it
+        leaves the passage a ModelNote names its times and says whether the velocity jumped (the
+        motion switched branch: ``branch_switches``) or stayed continuous (``singular_passages``)."""
+        if not self.n_constraints:
+            return
+        A = self.constraint_jacobian(q)
+        w = np.linalg.eigvalsh(A @ A.T)                          # σ² of A, ascending
+        ratio = np.sqrt(max(w[0], 0.0) / max(w[-1], 1e-300))
+        z = self._branch
+        q, V = np.array(q, float), np.array(V, float)        # the stepper's buffers: keep copies
+        if z is None and not ratio < SINGULAR_TOL:
+            self._last = (t, q, V)
+            return
+        f = self.f(q, V, t)
+        if z is None:                            # entering: from the last step before, if any
+            z = self._branch = {"t0": t, "min": ratio, "dev": np.zeros(len(V)), "scale": np.linalg.norm(V)}
+            last = self._last
+            if last is not None and last[0] < t:
+                z["t0"] = last[0]
+                z["prev"] = (last[0], last[2], self.f(last[1], last[2], last[0]))
+        prev = z.get("prev")
+        if prev is not None and t > prev[0]:
+            z["dev"] += V - prev[1] - 0.5 * (t - prev[0]) * (f + prev[2])
+        z["prev"] = (t, V, f)
+        z["min"] = min(z["min"], ratio)
+        z["scale"] = max(z["scale"], np.linalg.norm(V))
+        self._last = (t, q, V)
+        if ratio < SINGULAR_TOL:
+            return
+        self._branch = None                      # left the passage
+        jump = float(np.linalg.norm(z["dev"])) / max(z["scale"], 1e-300)
+        where = (f"between t = {z['t0']:.9g} and t = {t:.9g} the motion passed a singular configuration of its "
+                 f"constraints (smallest relative singular value of A {z['min']:.2g}), where assembly branches meet")
+        if jump > BRANCH_JUMP_TOL:
+            self.branch_switches.append((z["t0"], float(t)))
+            warnings.warn(ModelNote(
+                f"Pinocchio model: {where}, and the solution switched branch there: its velocity departed from "
+                f"the smooth motion's by {jump:.2g} of |V|. The solution after t = {z['t0']:.9g} follows another "
+                "assembly branch than the one it was on; rerun with a tighter tolerance or a smaller step to "
+                "pass the singular configuration on the branch the motion was on."), stacklevel=2)
+        else:
+            self.singular_passages.append((z["t0"], float(t)))
+            warnings.warn(ModelNote(
+                f"Pinocchio model: {where}; the velocity stayed continuous through it (departure {jump:.2g} of "
+                "|V|), so the motion is still on its branch."), stacklevel=2)
 
     @property
     def compiled(self):
@@ -123,6 +263,8 @@ class PinocchioModel(Model):
     cms = property(lambda self: self.cons.cms, doc="the RigidConstraintModels")
     cds = property(lambda self: self.cons.cds, doc="their RigidConstraintData")
     prox = property(lambda self: self.cons.prox, doc="constraintDynamics' ProximalSettings")
+    redundant_rows = property(lambda self: self.cons.redundant_rows,
+                              doc="constraint rows set aside as redundant at q0 (among all rows)")
     _tau = property(lambda self: self.loads.tau, doc="tau as given (a float vector, callable or None)")
 
     def joint_of(self, kind, index):
@@ -222,8 +364,12 @@ class PinocchioModel(Model):
 
     def constraint_jacobian(self, q):
         """A(q) = ∂g/∂V (ġ = A V) from Pinocchio's frame Jacobians
-        (:meth:`lgt_pinocchio.constraints.Constraints.jacobian`)."""
-        return self.cons.jacobian(q)
+        (:meth:`lgt_pinocchio.constraints.Constraints.jacobian`). The last one is kept: the
+        projection after a step ends with A at the step's q, which write_back reads again."""
+        key = np.asarray(q, float).tobytes()
+        if self._A_last is None or self._A_last[0] != key:
+            self._A_last = (key, self.cons.jacobian(q))
+        return self._A_last[1].copy()
 
     def constraint_gamma(self, q, V):
         """γ(q, V) = (d/dt A) V, so that g̈ = A V̇ + γ, from Pinocchio's frame accelerations

@@ -27,7 +27,9 @@ def f_numpy(m, q, V, t):
     pin = m.pin
     v = m.joints.v_from_twist(q, V)
     tau = m.loads.torques(t, q, v)
-    if m.n_constraints:
+    if m.cons.n_all:
+        if m.loads.fext is not None:           # constraintDynamics takes no fext: Jᵀf as torques
+            tau = tau + m.loads.joint_torques(t, q, v)
         a = m.cons.dynamics(q, v, tau)
     elif m.loads.fext is None:
         a = pin.aba(m.model, m.data, q, v, tau)
@@ -50,12 +52,17 @@ def build_f(m, kernels):
     nv_shape = (m.nv,)
     checked_tau, forces = m.loads.checked_tau, m.loads.forces
     ndarray, F64, contiguous = np.ndarray, _F64, np.ascontiguousarray
-    if m.n_constraints:
+    if m.cons.n_all:
         cms, cds, prox = m.cons.cms, m.cons.cds, m.cons.prox
         dynamics = pin.constraintDynamics
+        if m.loads.fext is None:
+            def engine(q, v, tau, t):
+                return dynamics(model, data, q, v, tau, cms, cds, prox)
+        else:
+            joint_torques = m.loads.joint_torques
 
-        def engine(q, v, tau, t):
-            return dynamics(model, data, q, v, tau, cms, cds, prox)
+            def engine(q, v, tau, t):              # constraintDynamics takes no fext: Jᵀf as torques
+                return dynamics(model, data, q, v, tau + joint_torques(t, q, v), cms, cds, prox)
     elif m.loads.fext is not None:
         aba = pin.aba
 

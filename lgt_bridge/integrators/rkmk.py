@@ -27,6 +27,22 @@ def build(method, problem, o):
     return AdaptiveRK(problem, tab, o["rtol"], o["atol"], o["projector"], first_step=o["dt"])
 
 
+_COEFFICIENTS = {}
+
+
+def _stage_coefficients(tableau):
+    """(rows of A as contiguous arrays, b, c as Python floats) of a tableau, made once per
+    tableau (a run's set-up is part of every call)."""
+    key = id(tableau)
+    got = _COEFFICIENTS.get(key)
+    if got is None or got[0] is not tableau:
+        if len(_COEFFICIENTS) > 64:          # tableaux made per call (fixed forms): keep it small
+            _COEFFICIENTS.clear()
+        got = _COEFFICIENTS[key] = (tableau, [np.ascontiguousarray(row, dtype=float) for row in tableau.A],
+                                    np.ascontiguousarray(tableau.b, dtype=float), [float(x) for x in tableau.c])
+    return got[1:]
+
+
 class ExplicitRK(Stepper):
 
     def __init__(self, problem, tableau, projector=None):
@@ -37,9 +53,7 @@ class ExplicitRK(Stepper):
         # dense output while the next step is attempted in the other set
         self._bufs = [(np.zeros((ns, problem.nX)), np.zeros((ns, problem.nv))) for _ in range(2)]
         self.KX, self.KW = self._bufs[0]
-        self._A = [np.ascontiguousarray(row, dtype=float) for row in tableau.A]
-        self._b = np.ascontiguousarray(tableau.b, dtype=float)
-        self._c = [float(x) for x in tableau.c]      # Python floats: stage times without numpy scalars
+        self._A, self._b, self._c = _stage_coefficients(tableau)
         self._fsal = False                     # KW[0] holds the first stage of the next step
         self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
 
@@ -239,9 +253,12 @@ class DenseStep:
 
 
 def _dop853_eval(F, x):
-    """Hairer's contd8 polynomial: y - y_0 at θ = x."""
-    y = np.zeros(F.shape[1])
-    for i, f in enumerate(F[::-1]):
-        y += f
-        y *= x if i % 2 == 0 else 1.0 - x
-    return y
+    """Hairer's contd8 polynomial: y - y_0 at θ = x, i.e. θ (F0 + (1-θ)(F1 + θ(F2 + (1-θ)(F3
+    + θ(F4 + (1-θ)(F5 + θ F6)))))) as one product with the weights of the rows."""
+    u = 1.0 - x
+    w1 = x * u
+    w2 = w1 * x
+    w3 = w2 * u
+    w4 = w3 * x
+    w5 = w4 * u
+    return np.array([x, w1, w2, w3, w4, w5, w5 * x]) @ F

@@ -68,3 +68,17 @@ def test_bench_integrators_tiny_writes_json_and_markdown(bench_integrators, tmp_
         assert r["success"] and _positive(r["pose_error"]) and _positive(r["wall_s"]) and r["n_f"] > 0
     assert {(x["method"], x["pose_error"]) for x in wp["at_error"]} >= {("dopri5", 1e-6), ("dopri5", 1e-8)}
     assert "## 1. Glue per stage" in md and "## 4. Heavy top work-precision" in md
+
+
+@pytest.mark.parametrize("script", sorted(p.name for p in SCRIPT.parent.glob("*.py")))
+def test_every_benchmark_script_starts(script):
+    """Each script under benchmarks/ imports what it needs (the engines, the test models it
+    shares) and parses its options: ``--help`` exits 0."""
+    import subprocess
+    import sys
+    pytest.importorskip("exudyn")
+    pytest.importorskip("pinocchio")
+    r = subprocess.run([sys.executable, str(SCRIPT.parent / script), "--help"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "usage" in r.stdout.lower()

@@ -332,3 +332,29 @@ def test_singular_mass_is_refused_before_the_first_step():
     model = ExudynModel(mbs)
     with pytest.raises(InputError, match="mass matrix at q0 is singular.*body 0"):
         simulate(model, (0, 0.1), method="dopri5")
+
+
+def test_drop_in_writes_accelerations_only_where_an_output_reads_them(monkeypatch):
+    """accelerations=None: an acceleration sensor gets the same values as with
+    accelerations=True; without such an output the accelerations (one f each) are computed
+    only for the final state, which still carries them."""
+    from exudyn.utilities import SensorNode
+    from lgt_exudyn.model import ExudynModel as EM
+    calls = []
+    original = EM.accelerations
+    monkeypatch.setattr(EM, "accelerations", lambda self, q, V, t: calls.append(t) or original(self, q, V, t))
+    T, n_out = 0.1, 200
+    runs = {}
+    for name, kind, acc in (("auto", exu.OutputVariableType.Acceleration, None),
+                            ("forced", exu.OutputVariableType.Acceleration, True),
+                            ("velocity", exu.OutputVariableType.Velocity, None)):
+        SC, mbs, node = em.heavy_top(em.EP, assemble=False)
+        sens = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True, outputVariableType=kind))
+        mbs.Assemble()
+        calls.clear()
+        SolveDynamic(mbs, em.settings(T, n_out, sensors=True), method="dop853", rtol=1e-9, atol=1e-9,
+                     accelerations=acc)
+        runs[name] = (mbs.GetSensorStoredData(sens), len(calls), mbs.systemData.GetODE2Coordinates_tt().copy())
+    assert np.array_equal(runs["auto"][0], runs["forced"][0])
+    assert runs["auto"][1] == runs["forced"][1] == n_out and runs["velocity"][1] == 1
+    assert np.abs(runs["velocity"][2] - runs["auto"][2]).max() < 1e-12 * (1 + np.abs(runs["auto"][2]).max())

@@ -10,6 +10,7 @@ from lgt_bridge.analytic import torque_free_omega  # noqa: E402
 from lgt_bridge.scenes import RigidBodySystem  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402
 from lgt_pinocchio import PinocchioModel  # noqa: E402
+from lgt_pinocchio.constraints import init_dynamics  # noqa: E402
 
 import references as ref  # noqa: E402
 from pinocchio_models import ball_chain  # noqa: E402
@@ -205,7 +206,7 @@ def test_constraint_jacobian_matches_pinocchio_where_satisfied(rng):
     cds = pin.StdVec_RigidConstraintData()
     cds.append(cm.createData())
     dd = model.createData()
-    pin.initConstraintDynamics(model, dd, cms, cds)
+    init_dynamics(pin, model, dd, cms, cds)                    # pin 3: three arguments, pin 4: four
     pin.constraintDynamics(model, dd, q0, v, np.zeros(model.nv), cms, cds, pin.ProximalSettings(1e-12, 1e-12, 20))
     Jc = pin.getConstraintsJacobian(model, dd, cms, cds)      # LOCAL frame of the contact
     Rc = (dd.oMi[j] * pl).rotation
@@ -214,12 +215,15 @@ def test_constraint_jacobian_matches_pinocchio_where_satisfied(rng):
     assert np.abs(AV[3:] - Jc[3:] @ v).max() < 1e-8 * max(1, np.abs(AV).max())
 
 
-def test_constraint_not_satisfied_at_q0_is_rejected():
+def test_constraint_to_the_default_world_anchor_holds_its_frame_at_q0():
+    """Pinocchio constrains the frame's acceleration: a constraint left at the default anchor
+    (joint 2 the world at the identity) keeps the frame where it is at q0 (issue 21; it was
+    refused as not satisfied at q0)."""
     model = free_body_model()
     cm = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, 1, pin.SE3(np.eye(3), np.array([0.5, 0, 0])),
                                   pin.LOCAL)
-    with pytest.raises(InputError, match="do not coincide"):
-        PinocchioModel(model, constraints=[cm])
+    pm = PinocchioModel(model, constraints=[cm])
+    assert pm.cons.anchored == [0] and np.abs(pm.constraints(pm.q0)).max() < 1e-15
 
 
 def test_mass_matrix_and_forces_reproduce_aba(rng):

@@ -77,9 +77,11 @@ def every_joint():
     joints = [pin.JointModelRUBX(), pin.JointModelRUBY(), pin.JointModelRUBZ(),
               pin.JointModelRevoluteUnboundedUnaligned(), pin.JointModelRevoluteUnaligned(axis),
               pin.JointModelPrismaticUnaligned(axis), pin.JointModelTranslation(),
-              pin.JointModelUniversal(np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
-              pin.JointModelEllipsoid(0.1, 0.2, 0.3), pin.JointModelHX(0.05),
-              pin.JointModelSpherical(), comp, pin.JointModelPlanar(), pin.JointModelSphericalZYX()]
+              pin.JointModelUniversal(np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))]
+    # joints of later Pinocchio versions (3.3 has neither), when the installed one has them
+    joints += [make(*args) for name, args in (("JointModelEllipsoid", (0.1, 0.2, 0.3)), ("JointModelHX", (0.05,)))
+               if (make := getattr(pin, name, None)) is not None]
+    joints += [pin.JointModelSpherical(), comp, pin.JointModelPlanar(), pin.JointModelSphericalZYX()]
     return _chain(joints, root=pin.JointModelFreeFlyer())
 
 
