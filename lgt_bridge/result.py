@@ -12,7 +12,9 @@ class SimulationResult:
     (n,), ``q`` (n, nq) in the engine's own coordinates, ``V`` (n, nv) as (ω body,
     ṙ inertial) per body, ``success``, ``message`` and ``stats`` (n_steps, n_f, n_rejected,
     n_newton, wall_s, and the constraint residuals before/after projection where there are
-    constraints)."""
+    constraints). With ``events``: ``t_events`` (one array of times per event function, as
+    scipy's ``sol.t_events``), ``q_events`` and ``V_events`` (per event function an array
+    (n, nq) / (n, nv) of the states there, as scipy's ``sol.y_events``); None without."""
 
     t: np.ndarray
     q: np.ndarray
@@ -23,6 +25,9 @@ class SimulationResult:
     method: str = ""
     group: object = ""
     chart: object = ""
+    t_events: list = None
+    q_events: list = None
+    V_events: list = None
 
     def raise_for_status(self):
         if not self.success:

@@ -8,7 +8,7 @@ from .validation import check_inputs
 
 def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
              atol=1e-8, q0=None, V0=None, t_eval=None, progress=None, max_steps=1_000_000,
-             project=True, rho_inf=0.9, newton_tol=1e-10):
+             project=True, rho_inf=0.9, newton_tol=1e-10, events=None):
     """Integrate ``model`` over ``t_span`` with a Lie group method through τ.
 
     method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5", "dop853" (adaptive: rtol/atol,
@@ -33,13 +33,19 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
     True always shows it, False never (:mod:`lgt_bridge.progress`).
     max_steps: the most accepted steps the run may take (default 10⁶); reaching it ends
     the run with ``success = False`` and a message saying so, keeping the steps computed.
+    events: a function g(t, q, V) -> float or a list of them (scipy's convention: attributes
+    ``terminal`` (bool or a count), ``direction`` (-1, 0, +1)); each zero crossing is located on
+    the step's continuous extension through τ (fixed-step methods: a cubic Hermite interpolant
+    of (X, W) within the step) and returned in ``t_events``, ``q_events``, ``V_events``; a
+    terminal event ends the run at its time with the model written back there
+    (``success=True``, the message names the event). See :mod:`lgt_bridge.events`.
     """
     t0, t1, q0, V0, t_eval = check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval,
                                           max_steps)
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=t1, q0=q0, V0=V0, max_steps=max_steps, project=project,
                      rho_inf=rho_inf, newton_tol=newton_tol, checked=True)
-    return sim.run(t1, t_eval, progress)
+    return sim.run(t1, t_eval, progress, events)
 
 
 __all__ = ["simulate", "SimulationResult", "Simulation", "make_stepper"]

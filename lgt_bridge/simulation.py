@@ -22,6 +22,7 @@ from functools import partial
 import numpy as np
 
 from . import auto as _auto
+from . import events as _events
 from .errors import ChartDomainError, InputError, ModelError, ModelNote
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector, project_initial
@@ -79,6 +80,7 @@ class Simulation:
         q0 = model.q0 if q0 is None else q0
         V0 = model.V0 if V0 is None else V0
         self.method, self.choice = method, None
+        self.rtol, self.atol = rtol, atol          # (events: their time tolerance)
         if _auto.wants_auto(group, chart):
             self.choice = _auto.choose(model, group, chart, method=method, project=project)
             group, chart = self.choice.groups, self.choice.charts
@@ -240,17 +242,21 @@ class Simulation:
             return st.q, st.V
         return st.dense(target)
 
-    def run(self, t_end, t_eval=None, progress=None):
+    def run(self, t_end, t_eval=None, progress=None, events=None):
         """Advance from the current time to ``t_end``, collecting the state at every step
         (``t_eval`` None; the start included) or at ``t_eval``; returns a
         :class:`~.result.SimulationResult` of this stretch. A failed step ends it with
         ``success=False`` (every step before it kept, the model at the last good state); a
-        fixed-step chart overrun raises ChartDomainError with the result as ``.result``."""
+        fixed-step chart overrun raises ChartDomainError with the result as ``.result``.
+        ``events``: functions g(t, q, V) whose zero crossings are located and returned as
+        ``t_events``/``q_events``/``V_events``; a terminal one ends the run there
+        (:mod:`lgt_bridge.events`)."""
         t0, t1 = self.t, float(t_end)
         if not t1 > t0:
             raise InputError(f"t_end = {t1} must be greater than the simulation's time t = {t0}.")
         t_eval = check_t_eval(t_eval, t0, t1)
         st = self.stepper
+        tracker = None if events is None else _events.Tracker(self, events)   # checks g before a step
         self.t_end = t1
         self.dense = st.dense_capable
         wall0 = time.perf_counter()
@@ -268,25 +274,32 @@ class Simulation:
             bar.step()
 
         success, message = True, "reached the end of t_span"
+        hook = on_step if tracker is None else tracker.hook(on_step)
         try:
             for target in targets:
-                q_out, V_out = self._advance_to(target, on_step)
+                q_out, V_out = self._advance_to(target, hook)
                 if not record_all:
                     ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
             if self.t < t1:
-                self._advance_to(t1, on_step)
+                self._advance_to(t1, hook)
+        except _events.Terminal as stop:      # the run ends at the event (the state moved there)
+            last = ts[-1] if ts else -np.inf
+            for t in ([stop.t] if record_all else [t for t in targets if last < t <= stop.t]):
+                q_out, V_out = stop.state(t)
+                ts.append(t), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
+            message = stop.message
         except StepFailed as exc:
             self.model.write_back(st.q, st.V, self.t)
             bar.close()
             if exc.error is ChartDomainError:
                 err = ChartDomainError(str(exc))
-                err.result = self._result(ts, qs, Vs, False, str(exc), wall0, n_steps0)
+                err.result = self._result(ts, qs, Vs, False, str(exc), wall0, n_steps0, tracker)
                 raise err from None
             success, message = False, str(exc)
         bar.close()
-        return self._result(ts, qs, Vs, success, message, wall0, n_steps0)
+        return self._result(ts, qs, Vs, success, message, wall0, n_steps0, tracker)
 
-    def _result(self, ts, qs, Vs, success, message, wall0, n_steps0):
+    def _result(self, ts, qs, Vs, success, message, wall0, n_steps0, tracker=None):
         wall = time.perf_counter() - wall0
         self.wall_s += wall
         stats = self.stats()
@@ -298,8 +311,11 @@ class Simulation:
                 (np.abs(model.constraints_at(q, t)[rows]).max() if len(rows) else 0.0)
                 for t, q in zip(ts, qs)))
         nq, nv = model.layout.nq, model.layout.nv
-        return SimulationResult(np.array(ts), np.array(qs).reshape(-1, nq), np.array(Vs).reshape(-1, nv),
-                                success, message, stats, self.method, self.group, self.chart)
+        res = SimulationResult(np.array(ts), np.array(qs).reshape(-1, nq), np.array(Vs).reshape(-1, nv),
+                               success, message, stats, self.method, self.group, self.chart)
+        if tracker is not None:
+            res.t_events, res.q_events, res.V_events = tracker.close()
+        return res
 
 
 __all__ = ["Simulation", "SimulationResult", "make_stepper"]

@@ -85,7 +85,9 @@ class Stepper:
     - ``step_size(dt, span)``: the fixed (or macro) step to use when ``dt`` is given or not;
     - ``min_step``: the shortest step a method that halves failing steps may take;
     - counters: ``n_rejected``, ``n_newton``, ``n_jacobians``, and ``prob.n_f``;
-    - ``projector``: the projection onto the constraints after each step, or None.
+    - ``projector``: the projection onto the constraints after each step, or None;
+    - optionally ``keep_dense`` (False): a stepper whose dense output costs extra computes it
+      only when this is set (scipy's macro steps, for events).
     """
 
     adaptive = False

@@ -18,6 +18,9 @@ def build(method, problem, o):
 class ScipyStepper(Stepper):
 
     adaptive = False
+    #: keep scipy's dense output of each macro step as ``dense`` (events ask for it; it costs
+    #: DOP853 three more f per internal step, so runs without events do not compute it)
+    keep_dense = False
 
     def __init__(self, problem, name, rtol, atol, projector=None):
         super().__init__(problem, projector)
@@ -42,7 +45,8 @@ class ScipyStepper(Stepper):
         from scipy.integrate import solve_ivp      # imported on first use: import lgt_bridge stays fast
         prob = self.prob
         y0 = np.concatenate([np.zeros(prob.nX), self.W])
-        sol = solve_ivp(self._fun, (t, t + h), y0, method=self.name, rtol=self.rtol, atol=self.atol)
+        sol = solve_ivp(self._fun, (t, t + h), y0, method=self.name, rtol=self.rtol, atol=self.atol,
+                        dense_output=self.keep_dense)
         if not sol.success or not np.isfinite(sol.y[:, -1]).all():
             if h > 1e-12 * max(1.0, abs(t)):
                 self.n_rejected += 1
@@ -56,6 +60,23 @@ class ScipyStepper(Stepper):
         if over:
             self.n_rejected += 1
             return False, 0.5 * h
+        if self.keep_dense:
+            self.dense = ScipyDense(prob, sol.sol, t, t + h)
         q1, quats = prob.configuration(X1)
         self.finish(t + h, q1, prob.model_velocity(W1, quats), W1, quats)
         return True, None
+
+
+class ScipyDense:
+    """scipy's dense output of one macro step on (X, W), through τ of the step's base (valid
+    after the stepper has moved on, like the adaptive methods' dense output)."""
+
+    def __init__(self, prob, sol, t0, t1):
+        self.prob, self.sol, self.t0, self.t1 = prob, sol, t0, t1
+        self.base = prob.snapshot()
+
+    def __call__(self, t):
+        y = self.sol(t)
+        nX = self.prob.nX
+        with self.prob.based_at(self.base) as prob:
+            return prob.state_at(y[:nX], y[nX:])

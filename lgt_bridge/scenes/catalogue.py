@@ -73,6 +73,33 @@ def chain(n=5, *, param="quat", length=1.0, mass=1.0, spin=2.0):
                            param=param, joints=joints, names=[f"link{k}" for k in range(n)])
 
 
+def pendulum(theta0=2.5, *, d=0.6, mass=2.0, inertia=(0.05, 0.08, 0.03), constrained=False, param="quat"):
+    """A compound pendulum swinging about the y axis under gravity, released from rest at the
+    angle ``theta0`` (rad) about y: centre of mass at c = (0, 0, -d) from the pivot in the body
+    frame (so its x is -d sin θ, zero at the vertical), principal moments ``inertia`` about
+    the centre of mass.
+
+    constrained=False: body frame at the pivot (``pivot_com``), unconstrained rotation;
+    constrained=True: body frame at the centre of mass, a spherical joint to ground at the
+    pivot (projected after explicit steps, index 3 in genalpha). ``equivalent_length`` is
+    I_pivot,yy/(m d): the simple pendulum of the same period, 4 K(sin²(θ0/2)) √(l/g)."""
+    param = _params.get(param)
+    c = np.array([0.0, 0.0, -float(d)])
+    s, co = np.sin(theta0), np.cos(theta0)
+    R0 = np.array([[co, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, co]])
+    rot = _rot_coords(param, R0)[0]
+    Jc = np.diag(np.asarray(inertia, float))
+    Jp = Jc + mass * (c @ c * np.eye(3) - np.outer(c, c))
+    if constrained:
+        m = RigidBodySystem([mass], [Jc], np.concatenate([R0 @ c, rot]), np.zeros(6), param=param,
+                            joints=[(0, -c, -1, np.zeros(3))], names=["pendulum"])
+    else:
+        m = RigidBodySystem([mass], [Jp], np.concatenate([np.zeros(3), rot]), np.zeros(6), param=param,
+                            pivot_com={0: c}, names=["pendulum"])
+    m.equivalent_length = Jp[1, 1] / (mass * d)
+    return m
+
+
 def top_and_free_bodies(n_free=3, *, param="quat", seed=0):
     """The heavy top on its spherical joint (frame at the centre of mass) plus
     ``n_free`` unjointed bodies falling and tumbling beside it: a scene whose bodies

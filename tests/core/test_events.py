@@ -1,0 +1,407 @@
+"""Events (issue 24): zero crossings of g(t, q, V) located on the step's continuous extension
+through τ, against independent references: the complete elliptic integral (pendulum period),
+free fall (√(2h/g)), scipy's solve_ivp on the same ODE in vector form (direction, terminal,
+order, count), the convergence order of the fixed-step Hermite location. The engines' events:
+tests/exudyn/test_exudyn_events.py, tests/pinocchio/test_pinocchio_events.py."""
+import math
+
+import mpmath
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from lgt_bridge import InputError, Simulation, scenes, simulate
+from lgt_bridge.events import HermiteStep, local_coordinates
+from lgt_bridge.groups import quaternion as _q
+from lgt_bridge.integrators.problem import make_problem
+from lgt_bridge.scenes.system import RigidBodySystem
+
+G = 9.81
+J_COM = np.diag([0.05, 0.08, 0.03])
+MASS, D = 2.0, 0.6
+
+
+def pendulum(theta0, constrained=False):
+    """The scene (centre of mass at (0, 0, -D) from the pivot, J_COM about it, released from
+    rest at θ0 about y) and its equivalent length I_pivot/(m d), computed here."""
+    m = scenes.pendulum(theta0, d=D, mass=MASS, inertia=np.diag(J_COM), constrained=constrained)
+    I_pivot = J_COM[1, 1] + MASS * D * D
+    return m, I_pivot / (MASS * D)
+
+
+def com_x(constrained):
+    """g = x of the centre of mass (zero at the vertical; -D sin θ)."""
+    if constrained:
+        return lambda t, q, V: q[0]
+    c = np.array([[0.0, 0.0, -D]])
+    return lambda t, q, V: _q._rotate(q[None, 3:7], c)[0, 0]
+
+
+def period(theta0, L):
+    """4 K(sin²(θ0/2)) √(L/g), K the complete elliptic integral of the first kind (parameter m)."""
+    return float(4 * mpmath.ellipk(math.sin(theta0 / 2) ** 2) * mpmath.sqrt(L / G))
+
+
+def falling_body(h=2.0, spin=(0.3, 0.2, 0.1), v0=(0.0, 0.0, 0.0)):
+    """A free body under gravity from height h (spinning: on SE(3) its translation is coupled
+    to its rotation through the body-frame velocity)."""
+    return RigidBodySystem([1.0], [np.diag([1.0, 2.0, 3.0])], np.array([0, 0, h, 1, 0, 0, 0.0]),
+                           np.concatenate([spin, v0]).astype(float))
+
+
+def event(fn, terminal=False, direction=0, interp_points=None):
+    fn.terminal, fn.direction = terminal, direction
+    if interp_points is not None:
+        fn.interp_points = interp_points
+    return fn
+
+
+# --------------------------------------------------------------------------- references
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_pendulum_period_against_elliptic_integral(group):
+    theta0 = 2.5                                  # 143°: far from the small-angle period
+    m, L = pendulum(theta0)
+    T = period(theta0, L)
+    g = com_x(False)
+    r = simulate(m, (0.0, 3.3 * T), method="dop853", group=group, rtol=1e-13, atol=1e-13,
+                 events=[g, event(com_x(False), direction=1)])
+    te, up = r.t_events
+    assert r.success and len(te) == 7 and len(up) == 4
+    # crossings at T/4 + k T/2: the first against K √(L/g), the rest by their spacing
+    assert abs(te[0] - T / 4) / T < 1e-10
+    T_fit = np.polyfit(np.arange(len(te)), te, 1)[0] * 2
+    assert abs(T_fit - T) / T < 1e-10
+    assert np.abs(np.diff(up) - T).max() / T < 1e-10
+    # the located states are on the vertical, and are the crossings from x < 0 to x > 0
+    assert np.abs([g(t, q, None) for t, q in zip(te, r.q_events[0])]).max() < 1e-12
+    assert np.all(r.V_events[1][:, 1] < 0)        # ω_y < 0 while x = -D sin θ increases
+
+
+def test_constrained_pendulum_period_on_the_projected_trajectory():
+    theta0 = 2.0
+    m, L = pendulum(theta0, constrained=True)
+    T = period(theta0, L)
+    runs = (("dop853", dict(rtol=1e-12, atol=1e-12), 1e-9), ("rkmk4", dict(dt=2e-3), 1e-7),
+            ("radau5", dict(rtol=1e-10, atol=1e-10), 1e-9), ("genalpha", dict(dt=1e-3), 1e-6))
+    for method, kw, tol in runs:          # genalpha: index 3, its step ends on the constraints
+        r = simulate(m, (0.0, 1.3 * T), method=method, events=[com_x(True)], **kw)
+        te = r.t_events[0]
+        assert len(te) == 3
+        assert abs(te[0] - T / 4) / T < tol and abs(te[2] - te[0] - T) / T < tol
+        # located states satisfy the joint (projected, or interpolated between genalpha's steps)
+        res = [np.abs(m.constraints(q)).max() for q in r.q_events[0]]
+        assert max(res) < 1e-12
+
+
+@pytest.mark.parametrize("method, kw", [("dop853", dict(rtol=1e-12, atol=1e-12)),
+                                        ("rkmk4", dict(dt=0.05, group="SO3xR3")),
+                                        ("scipy:DOP853", dict(dt=0.25, rtol=1e-12, atol=1e-12))])
+def test_fall_time_against_sqrt_2h_over_g(method, kw):
+    h = 2.0
+    ground = event(lambda t, q, V: q[2], terminal=True, direction=-1)
+    r = simulate(falling_body(h), (0.0, 2.0), method=method, events=[ground], **kw)
+    T = math.sqrt(2 * h / G)
+    assert r.success and "terminal event 0" in r.message
+    assert abs(r.t_events[0][0] - T) < 1e-12
+    assert r.t[-1] == r.t_events[0][0] and abs(r.q[-1, 2]) < 1e-12
+    np.testing.assert_allclose(r.V_events[0][0, 3:], [0, 0, -G * T], atol=1e-11)
+
+
+# --------------------------------------------------------------------------- against scipy
+def _vector_pendulum(L):
+    return lambda t, y: [y[1], -(G / L) * math.sin(y[0])]
+
+
+@pytest.mark.parametrize("direction", [-1, 0, 1])
+@pytest.mark.parametrize("terminal", [False, True, 2])
+def test_direction_and_terminal_as_scipy(direction, terminal):
+    """The same crossings, in the same order, as many, as solve_ivp on θ'' = -(g/L) sin θ
+    with the same event functions written on (θ, θ̇): x = -D sin θ, ω_y + 1 = θ̇ + 1, and a level
+    x = 0.3 D."""
+    theta0 = 2.5
+    m, L = pendulum(theta0)
+    T = period(theta0, L)
+    x = com_x(False)
+    ours = [event(x, terminal, direction), event(lambda t, q, V: V[1] + 1.0, False, direction),
+            event(lambda t, q, V: x(t, q, V) - 0.3 * D, terminal, -direction)]
+    theirs = [event(lambda t, y: -D * math.sin(y[0]), terminal, direction),
+              event(lambda t, y: y[1] + 1.0, False, direction),
+              event(lambda t, y: -D * math.sin(y[0]) - 0.3 * D, terminal, -direction)]
+    span = (0.0, 2.2 * T)
+    r = simulate(m, span, method="dop853", rtol=1e-12, atol=1e-12, events=ours)
+    s = solve_ivp(_vector_pendulum(L), span, [theta0, 0.0], method="DOP853", rtol=1e-12, atol=1e-12,
+                  events=theirs)
+    seq = lambda tev: sorted((t, i) for i, ts in enumerate(tev) for t in ts)   # noqa: E731
+    a, b = seq(r.t_events), seq(s.t_events)
+    assert [i for _, i in a] == [i for _, i in b] and len(a) > 0
+    np.testing.assert_allclose([t for t, _ in a], [t for t, _ in b], rtol=0, atol=1e-9)
+    assert r.success and (s.status == 1) == ("terminal" in r.message)
+    assert abs(r.t[-1] - s.t[-1]) < 1e-9
+    # the states there: θ from q against scipy's y_events
+    for i in range(3):
+        if len(s.y_events[i]):
+            theta = np.array([2 * math.atan2(q[5], q[3]) for q in r.q_events[i]])   # rotation about y
+            np.testing.assert_allclose(theta, s.y_events[i][:, 0], atol=1e-8)
+
+
+# --------------------------------------------------------------------------- within a step
+def test_crossing_inside_one_long_step_is_located_not_snapped():
+    """Fixed steps of 0.5 s over a fall of 0.639 s: the contact lies inside the second step and
+    is found there exactly (SO(3)xR³ + rkmk4 + the cubic Hermite are exact on a parabola)."""
+    T = math.sqrt(2 * 2.0 / G)
+    r = simulate(falling_body(), (0.0, 1.5), method="rkmk4", group="SO3xR3", dt=0.5,
+                 events=[lambda t, q, V: q[2]])
+    assert list(r.t) == [0.0, 0.5, 1.0, 1.5]
+    assert abs(r.t_events[0][0] - T) < 1e-13
+    # adaptive: one step spans the crossing, found inside it
+    r = simulate(falling_body(), (0.0, 1.5), method="dop853", group="SO3xR3", rtol=1e-3, atol=1e-3,
+                 events=[lambda t, q, V: q[2]])
+    te = r.t_events[0][0]
+    k = np.searchsorted(r.t, te)
+    h = r.t[k] - r.t[k - 1]
+    assert h > 1.0 and min(te - r.t[k - 1], r.t[k] - te) > 0.3
+    # the dense output is exact here: the located time is within the documented time
+    # tolerance 0.01·min(rtol, atol)·h
+    assert abs(te - T) < 0.01 * 1e-3 * h
+
+
+def test_two_crossings_in_one_step():
+    """A body thrown up through the level z = 1.1 and back within one step: no sign change
+    between the step's ends, so scipy's rule (interp_points = 0) sees nothing, as
+    solve_ivp; with interp_points the step's continuous extension is tested inside and both
+    crossings are found, in order, with their directions."""
+    body = falling_body(h=1.0, spin=(0, 0, 0), v0=(0, 0, 2.0))
+    level = lambda t, q, V: q[2] - 1.1            # noqa: E731
+    r = simulate(body, (0.0, 0.6), method="rkmk4", group="SO3xR3", dt=0.6, events=[level])
+    assert len(r.t) == 2 and len(r.t_events[0]) == 0
+    # z = 1 + 2t - g t²/2 = 1.1 at t = (2 ∓ √(4 - 2 g 0.1))/g
+    roots = (2 - np.array([1, -1]) * math.sqrt(4 - 2 * G * 0.1)) / G
+    for method in ("rkmk4", "dopri5"):
+        up = event(lambda t, q, V: level(t, q, V), direction=1, interp_points=4)
+        down = event(lambda t, q, V: level(t, q, V), direction=-1, interp_points=4)
+        both = event(lambda t, q, V: level(t, q, V), interp_points=4)
+        r = simulate(body, (0.0, 0.6), method=method, group="SO3xR3", dt=0.6, events=[both, up, down])
+        assert len(r.t) == 2                      # one step (dopri5: its error estimate is 0 here)
+        np.testing.assert_allclose(r.t_events[0], roots, atol=1e-12)
+        np.testing.assert_allclose(r.t_events[1], roots[:1], atol=1e-12)
+        np.testing.assert_allclose(r.t_events[2], roots[1:], atol=1e-12)
+
+
+def test_event_at_t0_is_not_reported():
+    """g(t0) = 0: no event at t0; the next return to zero is the first occurrence (once)."""
+    body = falling_body(h=1.0, spin=(0, 0, 0), v0=(0, 0, 2.0))
+    at_start = event(lambda t, q, V: q[2] - 1.0, terminal=True)
+    r = simulate(body, (0.0, 1.0), method="dop853", rtol=1e-12, atol=1e-12, events=[at_start])
+    assert r.success and "terminal" in r.message
+    np.testing.assert_allclose(r.t_events[0], [4.0 / G], atol=1e-12)
+
+
+def test_exact_zero_at_a_step_end_is_reported_once():
+    """g = t - 0.5 is exactly zero at the end of the fourth step of 0.125 s: one event there
+    (decided by the next step's sign), found by both directions' rules; a touch (t - 0.5)²
+    that does not change sign is no crossing."""
+    body = falling_body()
+    evs = [lambda t, q, V: t - 0.5, event(lambda t, q, V: t - 0.5, direction=1),
+           event(lambda t, q, V: t - 0.5, direction=-1), lambda t, q, V: (t - 0.5) ** 2]
+    r = simulate(body, (0.0, 1.0), method="rkmk4", dt=0.125, events=evs)
+    assert 0.5 in r.t
+    assert [list(te) for te in r.t_events] == [[0.5], [0.5], [], []]
+    np.testing.assert_array_equal(r.q_events[0][0], r.q[list(r.t).index(0.5)])
+
+
+# --------------------------------------------------------------------------- fixed-step order
+def test_rkmk4_location_order_four():
+    theta0 = 2.5
+    m, L = pendulum(theta0)
+    T = period(theta0, L)
+    dts = T / np.array([40, 56, 80, 113, 160])
+    errs = []
+    for dt in dts:
+        r = simulate(m, (0.0, 0.3 * T), method="rkmk4", dt=dt, events=[com_x(False)])
+        errs.append(abs(r.t_events[0][0] - T / 4))
+    slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
+    assert abs(slope - 4) < 0.3, (slope, errs)
+
+
+def test_hermite_interpolant_ends_and_local_coordinates():
+    """τ⁻¹ recovers X for every chart and group; the Hermite step reproduces both ends."""
+    m, _ = pendulum(1.0, constrained=True)
+    rng = np.random.default_rng(1)
+    for group in ("SE3", "SO3xR3"):
+        for chart in ("exp", "cay", "cay2"):
+            prob = make_problem(m, group, chart)
+            prob.start(m.q0.copy())
+            X = 0.4 * rng.normal(size=prob.nX)
+            q1, _ = prob.configuration(X)
+            np.testing.assert_allclose(local_coordinates(prob, q1), X, atol=1e-13)
+            W0, W1 = rng.normal(size=6), rng.normal(size=6)
+            base = prob.snapshot()
+            hs = HermiteStep(prob, base, 0.0, W0, 0.1, q1, W1)
+            qa, Va = hs(0.0)
+            qb, Vb = hs(0.1)
+            np.testing.assert_allclose(qa, m.q0, atol=1e-14)
+            np.testing.assert_allclose(qb, q1, atol=1e-13)
+
+
+# --------------------------------------------------------------------------- every method
+@pytest.mark.parametrize("method, kw, tol", [
+    ("euler", dict(dt=1e-3), 2e-3), ("rkmk2", dict(dt=1e-2), 2e-4), ("rkmk4", dict(dt=1e-2), 1e-8),
+    ("genalpha", dict(dt=1e-3), 1e-5), ("dopri5", dict(rtol=1e-10, atol=1e-10), 1e-9),
+    ("dop853", dict(rtol=1e-10, atol=1e-10), 1e-10), ("radau5", dict(rtol=1e-10, atol=1e-10), 1e-8),
+    ("scipy:RK45", dict(dt=0.2, rtol=1e-10, atol=1e-10), 1e-9), ("scipy:Radau", dict(dt=0.2, rtol=1e-10, atol=1e-10), 1e-8)])
+def test_every_method_group_and_chart(method, kw, tol):
+    h = 2.0
+    T = math.sqrt(2 * h / G)
+    for group in ("SE3", "SO3xR3"):
+        for chart in ("exp", "cay", "cay2"):
+            ground = event(lambda t, q, V: q[2], terminal=True)
+            r = simulate(falling_body(h, spin=(1.0, 2.0, 0.5)), (0.0, 1.0), method=method, group=group,
+                         chart=chart, events=[ground], **kw)
+            assert r.success and abs(r.t_events[0][0] - T) < tol, (group, chart, r.t_events[0] - T)
+            assert r.t[-1] == r.t_events[0][0]
+
+
+def test_numpy_backend_finds_the_same_events(monkeypatch):
+    m, L = pendulum(2.5)
+    T = period(2.5, L)
+    args = dict(method="rkmk4", dt=T / 50, events=[com_x(False)])
+    a = simulate(m, (0.0, T), **args)
+    monkeypatch.setenv("LGT_BRIDGE_BACKEND", "numpy")
+    m2, _ = pendulum(2.5)
+    b = simulate(m2, (0.0, T), **args)
+    assert len(a.t_events[0]) == len(b.t_events[0]) == 2
+    np.testing.assert_allclose(a.t_events[0], b.t_events[0], atol=1e-12)
+    np.testing.assert_allclose(a.q_events[0], b.q_events[0], atol=1e-12)
+    c = simulate(m2, (0.0, T), method="dop853", rtol=1e-12, atol=1e-12, events=[com_x(False)])
+    np.testing.assert_allclose(c.t_events[0], [T / 4, 3 * T / 4], rtol=1e-10)
+
+
+# --------------------------------------------------------------------------- outputs and errors
+class Recording(RigidBodySystem):
+    """A falling body that records the model's write-backs."""
+
+    def write_back(self, q, V, t):
+        self.written = (np.array(q), np.array(V), t)
+
+
+def _recording():
+    return Recording([1.0], [np.diag([1.0, 2.0, 3.0])], np.array([0, 0, 2.0, 1, 0, 0, 0.0]),
+                     np.array([0.3, 0.2, 0.1, 0, 0, 0.0]))
+
+
+@pytest.mark.parametrize("method, kw", [("rkmk4", dict(dt=0.05)), ("dop853", {}), ("genalpha", dict(dt=0.05))])
+def test_terminal_event_writes_back_and_the_run_continues(method, kw):
+    m = _recording()
+    ground = event(lambda t, q, V: q[2] - 0.5, terminal=True)
+    sim = Simulation(m, method=method, t_end=2.0, **kw)
+    r = sim.run(2.0, events=[ground])
+    te = r.t_events[0][0]
+    assert r.success and r.message.startswith("terminal event 0 (<lambda>) at t = ")
+    assert sim.t == te == r.t[-1]
+    q, V, t = m.written
+    assert t == te and np.array_equal(q, r.q_events[0][0]) and np.array_equal(sim.q, q)
+    assert abs(q[2] - 0.5) < 1e-9
+    # consecutive runs carry on from the event
+    r2 = sim.run(te + 0.1)
+    assert r2.success and r2.t[0] == te and r2.t_events is None
+    assert abs(r2.q[-1, 2] - (2.0 - G * (te + 0.1) ** 2 / 2)) < (1e-3 if method == "genalpha" else 1e-6)
+
+
+def test_a_run_continued_from_a_terminal_event_does_not_find_it_again():
+    """Stop at each pass of the pendulum through the vertical and continue with the same
+    event: every pass once, none at the start of the next run (g there is a rounding-level
+    number of either sign)."""
+    m, L = pendulum(2.5)
+    T = period(2.5, L)
+    g = event(com_x(False), terminal=True)
+    sim = Simulation(m, method="dop853", rtol=1e-12, atol=1e-12, t_end=1.6 * T)
+    passes = []
+    while sim.t < 1.6 * T:
+        r = sim.run(1.6 * T, events=[g])
+        passes += list(r.t_events[0])
+    np.testing.assert_allclose(passes, T / 4 + np.arange(3) * T / 2, rtol=1e-10)
+
+
+def test_terminal_count():
+    m, L = pendulum(2.5)
+    T = period(2.5, L)
+    third = event(com_x(False), terminal=3)
+    r = simulate(m, (0.0, 5 * T), method="dop853", rtol=1e-12, atol=1e-12, events=[third])
+    np.testing.assert_allclose(r.t_events[0], T / 4 + np.arange(3) * T / 2, rtol=1e-10)
+    assert "(occurrence 3)" in r.message and r.t[-1] == r.t_events[0][-1]
+
+
+@pytest.mark.parametrize("method, kw", [("rkmk4", dict(dt=0.1)), ("dop853", {}), ("radau5", {})])
+def test_with_t_eval(method, kw):
+    h = 2.0
+    T = math.sqrt(2 * h / G)
+    t_eval = np.linspace(0.0, 1.0, 11)
+    ground = event(lambda t, q, V: q[2], terminal=True)
+    r = simulate(falling_body(h), (0.0, 1.0), method=method, t_eval=t_eval, events=[ground], **kw)
+    np.testing.assert_array_equal(r.t, t_eval[t_eval <= T])           # as scipy: t_eval up to the event
+    np.testing.assert_allclose(r.q[:, 2], h - G * r.t ** 2 / 2, atol=1e-6)
+    assert abs(r.t_events[0][0] - T) < 1e-7
+    # non-terminal events do not depend on t_eval with dense output
+    level = lambda t, q, V: q[2] - 1.0            # noqa: E731
+    a = simulate(falling_body(h), (0.0, 0.65), method="dop853", events=[level])
+    b = simulate(falling_body(h), (0.0, 0.65), method="dop853", t_eval=t_eval[:7], events=[level])
+    assert a.t_events[0][0] == b.t_events[0][0]
+
+
+def test_bad_input_before_the_first_step():
+    m = falling_body()
+    cases = [
+        (["not a function"], "not a function"),
+        ([lambda t, q, V: np.zeros(2)], "returned"),
+        ([lambda t, q, V: None], "returned"),
+        ([lambda t, q, V: math.nan], "returned nan"),
+        ([lambda t, q, V: True], "returned True"),
+        ([lambda t, q, V: 1 / 0], "raised ZeroDivisionError"),
+        ([lambda t, q: q[2]], "raised TypeError"),
+        ([event(lambda t, q, V: q[2], terminal=-1)], "terminal = -1"),
+        ([event(lambda t, q, V: q[2], terminal="yes")], "terminal = 'yes'"),
+        ([event(lambda t, q, V: q[2], direction="up")], "direction = 'up'"),
+        ([event(lambda t, q, V: q[2], interp_points=-2)], "interp_points = -2"),
+        (42, "pass a function"),
+    ]
+    for events, text in cases:
+        sim = Simulation(m, method="rkmk4", dt=0.01, t_end=1.0)
+        with pytest.raises(InputError, match=text):
+            sim.run(1.0, events=events)
+        assert sim.n_steps == 0 and sim.t == 0.0
+    with pytest.raises(InputError, match="event 1"):
+        simulate(m, (0, 1), dt=0.01, events=[lambda t, q, V: 1.0, lambda t, q, V: "x"])
+    # one callable is accepted as scipy accepts it
+    r = simulate(m, (0, 1), dt=0.01, events=lambda t, q, V: q[2] - 1.0)
+    assert len(r.t_events) == 1 and len(r.t_events[0]) == 1
+
+
+def test_exception_in_g_ends_the_run_keeping_every_step():
+    def fragile(t, q, V):
+        if t > 0.3:
+            raise RuntimeError("sensor offline")
+        return q[2]
+
+    m = _recording()
+    r = simulate(m, (0.0, 1.0), method="rkmk4", dt=0.05, events=[lambda t, q, V: 1.0, fragile])
+    assert not r.success
+    assert "event 1 (fragile) raised RuntimeError at t = 0.35" in r.message and "sensor offline" in r.message
+    np.testing.assert_allclose(r.t, np.arange(8) * 0.05, atol=1e-14)     # every step, the last one too
+    assert m.written[2] == r.t[-1]
+
+
+def test_events_add_no_f_evaluations_to_steps_without_crossings():
+    m, L = pendulum(2.5)
+    for method, kw in (("rkmk4", dict(dt=0.01)), ("dop853", {}), ("radau5", {})):
+        a = simulate(m, (0.0, 1.0), method=method, **kw)
+        b = simulate(m, (0.0, 1.0), method=method, events=[lambda t, q, V: 1.0], **kw)
+        assert a.stats["n_f"] == b.stats["n_f"] and np.array_equal(a.q, b.q)
+        assert a.t_events is None and len(b.t_events[0]) == 0
+
+
+def test_example_pendulum_period_runs(capsys):
+    import runpy
+    from pathlib import Path
+    runpy.run_path(str(Path(__file__).resolve().parents[2] / "examples" / "events_pendulum_period.py"))
+    out = capsys.readouterr().out
+    assert "dop853 rtol = atol = 1e-13  11 passes" in out
