@@ -9,8 +9,11 @@ needs, and interpolate Exudyn's output steps with their dense output.
 """
 import sys
 import time
+import warnings
 
-from lgt_bridge.errors import InputError, StepError
+import numpy as np
+
+from lgt_bridge.errors import InputError, LGTError, ModelNote, StepError
 from lgt_bridge.integrators import registry
 from lgt_bridge.integrators.base import StepFailed
 from lgt_bridge.progress import simulation_bar
@@ -49,6 +52,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     - ``minimumStepSize`` (error control: a step the controller would shrink below it fails
       with StepError), ``initialStepSize`` (error control: the first trial step when > 0;
       0: the bridge's own starting-step estimate).
+    - ``generalizedAlpha.useIndex2Constraints``: True enforces the constraints on velocities
+      only, for every method (as Exudyn: an initial position violation stays, positions are
+      never projected); False (default): positions and velocities. Statistics:
+      ``constraints``.
     - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``; ``verbose``
       False silences it). ``realtime.active``/``simulateInRealtime``: ignored (one note).
 
@@ -60,13 +67,20 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     engine's accelerations after each output step, one more f evaluation each, for the
     solution file and acceleration sensors). A failed step raises StepError with the system
     at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
+
+    Pre-step user functions (``mbs.SetPreStepUserFunction``) may change the model between
+    Exudyn's steps: connectors switched on or off are classified again and the stepper
+    rebuilt (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step
+    as a time dependence (the explicit methods follow it in position and velocity). After
+    each output step the Lagrange multipliers of the state written are put into Exudyn's
+    algebraic coordinates (joint force sensors read them).
     """
     import exudyn as exu
     if simulationSettings is None:
         simulationSettings = exu.SimulationSettings()
     if not getattr(mbs, "systemIsConsistent", False) and autoAssemble:
         mbs.Assemble()
-    model = ExudynModel(mbs)
+    model = ExudynModel(mbs, simulationSettings)
     ti = simulationSettings.timeIntegration
     t0, t1, n = float(ti.startTime), float(ti.endTime), int(ti.numberOfSteps)
     if n <= 0:
@@ -113,7 +127,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if prestep else t1, project=project, rho_inf=rho_inf,
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), checked=True)
-    group, chart, stepper = sim.group, sim.chart, sim.stepper
+    group, chart = sim.group, sim.chart
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -124,27 +138,49 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             "there (a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
                             "minimumStepSize, or use method='genalpha'.")
     first_step = sim.first_step
-    bar = simulation_bar(progress, t0, t1, sim, stepper, desc="SolveDynamic")
+    bar = simulation_bar(progress, t0, t1, sim, sim.stepper, desc="SolveDynamic")
     on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
     sd = mbs.systemData
     failure = []
     wall0 = time.perf_counter()
+    # pre-step user functions: the residual where the last step ended, to see offsets moved
+    g_end = [model.holonomic_residual(sim.q, sim.t)] if prestep else None
+    rebuilt = [0]
 
     def newton(solver, mbs_, settings):
         h = solver.it.currentStepSize
         ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
-        if prestep:                  # the model may have changed: no stage carried over
-            sim.restart()
         try:
+            if prestep:              # the model may have changed: no stage carried over
+                if model.rows_changed(sim.q, sim.V, sim.t):     # connectors switched on/off
+                    rep = sim.rebuild()
+                    rebuilt[0] += 1
+                    g_end[0] = None
+                    if rep is not None:
+                        warnings.warn(ModelNote(
+                            f"Exudyn model: constraints switched on at t = {sim.t:g} by the pre-step user "
+                            f"function are violated (positions by {rep['position_residual']:.3g}, velocities "
+                            f"by {rep['velocity_residual']:.3g}); the state was moved onto them (q by up to "
+                            f"{rep['position']:.3g}, V by up to {rep['velocity']:.3g}), as Exudyn's implicit "
+                            "solver closes them in its next step."), stacklevel=2)
+                else:
+                    sim.restart()
+                if model.begin_step(sim.q, sim.t, ts + h - sim.t, g_end[0]) and sim.stepper.projector is not None:
+                    # an offset moved: the velocities start on its rate (as Exudyn's limit)
+                    V = sim.stepper.projector.velocities(sim.q, sim.V, sim.t)[0]
+                    sim.stepper.set_state(sim.q, V)
             q_out, V_out = sim.advance_to(ts + h, on_step)
-        except StepFailed as exc:
-            failure.append(str(exc))
-            model.write_back(stepper.q, stepper.V, sim.t)
+            if prestep:
+                g_end[0] = model.holonomic_residual(q_out, ts + h)
+            # the state, and the accelerations (solution file, acceleration sensors) and
+            # Lagrange multipliers (joint force sensors) of that state
+            model.write_outputs(q_out, V_out, ts + h, accelerations)
+        except (StepFailed, LGTError, np.linalg.LinAlgError) as exc:
+            failure.append(str(exc) if not isinstance(exc, np.linalg.LinAlgError)
+                           else f"a linear solve failed at t = {sim.t:.9g} ({exc}).")
+            model.write_back(sim.stepper.q, sim.stepper.V, sim.t)
             solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
             return True
-        model.write_back(q_out, V_out, ts + h)
-        if accelerations:      # Exudyn's solution file and acceleration sensors read them
-            sd.SetODE2Coordinates_tt(model.accelerations(q_out, V_out, ts + h))
         return True
 
     solver = exu.MainSolverImplicitSecondOrder()
@@ -160,6 +196,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         for obj, name, value in saved:
             setattr(obj, name, value)
         bar.close()
+    stepper = sim.stepper
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,
               tolerance_source=tol_source if adaptive else None, dt=None if adaptive else h_out,
@@ -173,6 +210,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         st["initial_projection"] = sim.initial_projection
     if model.redundant_rows:
         st["redundant_constraints"] = len(model.redundant_rows)
+    if model.n_constraints or rebuilt[0]:
+        st["constraints"] = ("index 2: velocity level only, positions not projected "
+                             "(generalizedAlpha.useIndex2Constraints = True)" if model.index2 else
+                             "index 3: positions and velocities")
+    if rebuilt[0]:
+        st["constraint_rows_rebuilt"] = rebuilt[0]
     if stepper.projector is not None:
         st["constraint_after_projection"] = stepper.projector.max_after
     mbs.sys["lgtBridgeStats"] = st
