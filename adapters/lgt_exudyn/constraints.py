@@ -131,9 +131,7 @@ class ConstraintRows:
         self.n = len(self.ae_keep)
         self.nonholonomic = tuple(int(k) for k in np.flatnonzero(vel))
         self.time_dependent = self._detect_time_dependence(q0, t0)
-        if self.nonholonomic and self.velocity_level:
-            rest = self.residual(q0, np.zeros(self.nodes.n2), t0, True)[list(self.nonholonomic)]
-            self.velocity_offset = bool(np.abs(rest).max() > 0.0)
+        self.detect_velocity_offset(q0, t0)
         E.write(q0, qd0, t0)
         if self.redundant_rows:
             import warnings
@@ -145,6 +143,14 @@ class ConstraintRows:
                 f"{self.redundant_rows}: {E.ae_owners(self.redundant_rows)}); lgt_bridge sets them "
                 "aside and enforces the others (the motion is the same; their Lagrange multipliers "
                 "are not unique)."), stacklevel=4)
+
+    def detect_velocity_offset(self, q, t):
+        """Set ``velocity_offset``: a velocity-level row's residual at rest is not zero at
+        (q, t) (its offset; again after a pre-step function may have changed it)."""
+        self.velocity_offset = False
+        if self.nonholonomic and self.velocity_level:
+            rest = self.residual(q, np.zeros(self.nodes.n2), t, True)[list(self.nonholonomic)]
+            self.velocity_offset = bool(np.abs(rest).max() > 0.0)
 
     def _can_evaluate_velocity_level(self):
         """(False, Exudyn's message) when Exudyn refuses the velocity-level algebraic

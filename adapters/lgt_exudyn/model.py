@@ -137,16 +137,18 @@ class ExudynModel(Model):
         step ended) is spread over the step as a time dependence (see
         :meth:`.constraints.ConstraintRows.set_ramp`), so explicit steps follow it in
         position and velocity instead of projecting a jump. Not with index 2 (Exudyn's
-        velocity-level rows do not see offsets). True when a ramp was set."""
+        velocity-level rows do not see offsets). Velocity-level offsets are looked at again.
+        True when the step's velocity targets may have moved (a ramp, velocity offsets): the
+        step should start with its velocities on them."""
         cons = self.cons
         cons.set_ramp(0, 1, None)
-        if g_end is None or self.index2 or not self.n_constraints or len(g_end) != cons.n:
-            return False
-        jump = self.holonomic_residual(q, t) - g_end
-        if np.abs(jump).max() > 1e-14 * (1.0 + np.abs(g_end).max()):
-            cons.set_ramp(t, h, jump)
-            return True
-        return False
+        if cons.nonholonomic:               # a velocity-level offset may have been set
+            cons.detect_velocity_offset(q[:self.n2], t)
+        if g_end is not None and not self.index2 and self.n_constraints and len(g_end) == cons.n:
+            jump = self.holonomic_residual(q, t) - g_end
+            if np.abs(jump).max() > 1e-14 * (1.0 + np.abs(g_end).max()):
+                cons.set_ramp(t, h, jump)
+        return cons.ramp is not None or cons.velocity_offset
 
     @engine_call
     def holonomic_residual(self, q, t):

@@ -166,7 +166,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                 else:
                     sim.restart()
                 if model.begin_step(sim.q, sim.t, ts + h - sim.t, g_end[0]) and sim.stepper.projector is not None:
-                    # an offset moved: the velocities start on its rate (as Exudyn's limit)
+                    # an offset moved: the velocities start on the new targets (Exudyn's
+                    # step applies the end time's offsets over the whole step)
                     V = sim.stepper.projector.velocities(sim.q, sim.V, sim.t)[0]
                     sim.stepper.set_state(sim.q, V)
             q_out, V_out = sim.advance_to(ts + h, on_step)
