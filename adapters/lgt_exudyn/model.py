@@ -34,7 +34,10 @@ class ExudynModel(Model):
     (:class:`.layout.NodeLayout`: the layout and velocity maps), ``cons``
     (:class:`.constraints.ConstraintRows`), ``ode1`` (:class:`.ode1.ODE1States`, or None);
     ``Mbar``: the twist mass matrix when it is constant (then Exudyn's is never evaluated
-    again), else None."""
+    again), else None. ``simulationSettings`` (optional): the user's; read are
+    ``timeIntegration.generalizedAlpha.useIndex2Constraints`` (``index2``: constraints on
+    velocities only, as Exudyn enforces them then) and the discontinuous iteration's
+    tolerance."""
 
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend
@@ -67,7 +70,8 @@ class ExudynModel(Model):
                            and simulationSettings.timeIntegration.generalizedAlpha.useIndex2Constraints)
         self.cons = ConstraintRows(engine, nodes, self.q0, self.V0, self.t0, self.index2)
         self._take_rows()
-        self._connectors = self._connector_state()
+        # connectors a pre-step user function may switch (read once here, then each step)
+        self._connectors = self._connector_state() if _has_prestep(mbs) else None
         if sd.DataSize():
             # contact/friction states: Exudyn's own discontinuous iteration after each step
             self.post_step = self._post_newton
@@ -116,7 +120,8 @@ class ExudynModel(Model):
         user function did it; True when the rows changed (steppers built on the old rows
         must be rebuilt)."""
         state = self._connector_state()
-        if state == self._connectors:
+        if self._connectors is None or state == self._connectors:
+            self._connectors = state
             return False
         self._connectors = state
         q2, V2 = q[:self.n2], V[:self.nv]
@@ -517,6 +522,14 @@ class ExudynModel(Model):
                         raise err from exc
                 self.f = f
         return self._P
+
+
+def _has_prestep(mbs):
+    """True when the system has a pre-step user function (Exudyn returns 0 when unset)."""
+    try:
+        return bool(mbs.GetPreStepUserFunction())
+    except Exception:
+        return False
 
 
 def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
