@@ -89,6 +89,8 @@ class Simulation:
         stepper, dt = make_stepper(model, method, group, chart, dt=dt, rtol=rtol, atol=atol,
                                    project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=span,
                                    fixed_steps=fixed_steps)
+        self._options = dict(dt=dt, rtol=rtol, atol=atol, project=project, rho_inf=rho_inf,
+                             newton_tol=newton_tol, span=span, fixed_steps=fixed_steps)
         self._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, project)
         if min_step > 0:
             stepper.min_step = min_step
@@ -141,6 +143,33 @@ class Simulation:
         the model changed between steps (an engine's pre-step user function)."""
         st = self.stepper
         st.set_state(st.q, st.V)
+
+    def rebuild(self):
+        """Build the stepper again at the current state, for the model's constraint rows as
+        they are now (an engine's pre-step user function switched a connector on or off:
+        the rows a stepper was built on are gone or new). The state is made consistent with
+        the new rows as at the start (a connector switched on may be violated); counters
+        carry on. Returns the projection's report (None: the state was consistent)."""
+        old = self.stepper
+        if getattr(self, "_options", None) is None:
+            raise InputError("Simulation.rebuild needs a Simulation built from a method name.")
+        st, _ = make_stepper(self.model, self.method, self.group, self.chart, **self._options)
+        q, V, rep = old.q.copy(), old.V.copy(), None
+        if self.model.n_constraints:
+            own = getattr(self.model, "project_initial", None)
+            q, V, rep = (own or partial(project_initial, self.model))(q, V, self.t)
+        st.set_state(q, V)
+        st.prob.n_f += old.prob.n_f
+        st.n_rejected += old.n_rejected
+        st.n_newton += old.n_newton
+        st.n_jacobians += old.n_jacobians
+        st.min_step = old.min_step
+        if st.projector is not None and old.projector is not None:
+            for k in ("max_before", "max_after", "max_vel_after", "iterations"):
+                setattr(st.projector, k, max(getattr(st.projector, k), getattr(old.projector, k)))
+        self.stepper = st
+        self.dense = st.dense_capable and self.t_end is not None
+        return rep
 
     def stats(self):
         """Counters of the run so far."""

@@ -37,29 +37,64 @@ class ConstraintRows:
     """The constraint rows of an Exudyn system (:class:`.engine.Engine` ``engine``, nodes
     :class:`.layout.NodeLayout` ``nodes``), classified at the initial state (q0, V0, t0).
 
-    ``ae_keep``: Exudyn's AE rows that are the constraints, in order; ``velocity_rows``
-    (indices into them): rows with a velocity Jacobian (nonholonomic: rolling);
-    ``inactive_rows`` (Exudyn keeps them as λ = 0: ``constrainedAxes`` zeros) and
+    ``ae_keep``: Exudyn's AE rows that are the constraints, in order; ``nonholonomic``
+    (indices into them): rows with a velocity Jacobian (rolling, velocity-level
+    CoordinateConstraints); ``velocity_rows``: the rows enforced on velocities only — the
+    nonholonomic ones, or every row with ``index2`` (Exudyn's
+    ``generalizedAlpha.useIndex2Constraints``: positions are never projected, an initial
+    position violation stays, as with Exudyn's own solver); ``inactive_rows`` (Exudyn keeps
+    them as λ = 0: ``constrainedAxes`` zeros, connectors with ``activeConnector`` False) and
     ``redundant_rows`` (dependent on others at q0: redundant closed loops): AE rows set
-    aside; ``time_dependent``: the residual changes with time; ``exudyn_gt``: Exudyn's
-    velocity-level residual carries ∂g/∂t; ``velocity_level``: Exudyn evaluates the
-    velocity-level residual at all."""
+    aside; ``time_dependent``: the residual changes with time; ``velocity_offset``: a
+    velocity-level row has a right-hand side at rest (``CoordinateConstraint(velocityLevel=
+    True, offset=c)``: q̇ᵢ = c); ``exudyn_gt``: Exudyn's velocity-level residual carries
+    ∂g/∂t; ``velocity_level``: Exudyn evaluates the velocity-level residual at all;
+    ``ramp``: a jump of the position residual made between steps (a pre-step user function
+    changed an offset), spread over the step as a time dependence (:meth:`set_ramp`)."""
 
-    def __init__(self, engine, nodes, q0, V0, t0):
-        self.engine, self.nodes = engine, nodes
+    def __init__(self, engine, nodes, q0, V0, t0, index2=False):
+        self.engine, self.nodes, self.index2 = engine, nodes, bool(index2)
         self.ae_keep = np.array(sorted(set(range(engine.nae)) - set(nodes.ep_ae)), int)
         self.n = len(self.ae_keep)
-        self.velocity_rows = ()
-        self.time_dependent = False
+        self.nonholonomic = ()
+        self.time_dependent = self.velocity_offset = False
         self.inactive_rows, self.redundant_rows = [], []
         self.velocity_level, self.exudyn_gt = True, False
+        self.ramp = None
         if self.n:
             self._classify(q0, V0, t0)
 
     @property
-    def position_rows(self):
-        vel = set(self.velocity_rows)
+    def velocity_rows(self):
+        return tuple(range(self.n)) if self.index2 else self.nonholonomic
+
+    @property
+    def holonomic_rows(self):
+        """Rows with a position residual g(q, t) (whether enforced on positions or not)."""
+        vel = set(self.nonholonomic)
         return np.array([i for i in range(self.n) if i not in vel], int)
+
+    @property
+    def position_rows(self):
+        """Rows enforced on positions: the holonomic ones, none with ``index2``."""
+        return np.zeros(0, int) if self.index2 else self.holonomic_rows
+
+    @property
+    def has_rhs(self):
+        """True when A V = b has a b (time dependence, velocity offsets, a ramp)."""
+        return self.time_dependent or self.velocity_offset or self.ramp is not None
+
+    def set_ramp(self, t0, h, jump):
+        """A jump of the holonomic rows' residual at the step start t0 (``jump`` per kept row,
+        0 on other rows; None: no ramp): over [t0, t0 + h] the residual is taken as
+        g(q, t) - jump·(1 - (t - t0)/h), so the step starts where the last one ended and ends
+        on the new constraints, with ∂g/∂t + jump/h as the velocity target (what a drive
+        ramped by a pre-step function means)."""
+        self.ramp = None if jump is None else (float(t0), float(h), np.asarray(jump, float))
+
+    def _ramp_g(self, t):
+        t0, h, jump = self.ramp
+        return jump * (1.0 - min(max((t - t0) / h, 0.0), 1.0))
 
     # ------------------------------------------------------------------ classification
     def _classify(self, q0, V0, t0):
@@ -94,8 +129,9 @@ class ConstraintRows:
         self.redundant_rows += [int(i) for i in keep[~ind]]
         self.ae_keep, vel = keep[ind], vel[ind]
         self.n = len(self.ae_keep)
-        self.velocity_rows = tuple(int(k) for k in np.flatnonzero(vel))
+        self.nonholonomic = tuple(int(k) for k in np.flatnonzero(vel))
         self.time_dependent = self._detect_time_dependence(q0, t0)
+        self.detect_velocity_offset(q0, t0)
         E.write(q0, qd0, t0)
         if self.redundant_rows:
             import warnings
@@ -107,6 +143,14 @@ class ConstraintRows:
                 f"{self.redundant_rows}: {E.ae_owners(self.redundant_rows)}); lgt_bridge sets them "
                 "aside and enforces the others (the motion is the same; their Lagrange multipliers "
                 "are not unique)."), stacklevel=4)
+
+    def detect_velocity_offset(self, q, t):
+        """Set ``velocity_offset``: a velocity-level row's residual at rest is not zero at
+        (q, t) (its offset; again after a pre-step function may have changed it)."""
+        self.velocity_offset = False
+        if self.nonholonomic and self.velocity_level:
+            rest = self.residual(q, np.zeros(self.nodes.n2), t, True)[list(self.nonholonomic)]
+            self.velocity_offset = bool(np.abs(rest).max() > 0.0)
 
     def _can_evaluate_velocity_level(self):
         """(False, Exudyn's message) when Exudyn refuses the velocity-level algebraic
@@ -135,7 +179,7 @@ class ConstraintRows:
             return False
         if not self.velocity_level:
             return True
-        pos = self.position_rows
+        pos = self.holonomic_rows
         ok = True
         for t in ts:
             gt = self.gt_fd(q, t)[pos]
@@ -153,7 +197,7 @@ class ConstraintRows:
         """The kept rows of the AE Jacobian at the written coordinates: ∂C/∂q on position
         rows, ∂C/∂q̇ on velocity-level rows (each row has only one of the two, so one call
         with both factors gives both)."""
-        return self.engine.ae_jacobian(1.0, 1.0 if len(self.velocity_rows) else 0.0)[0][self.ae_keep]
+        return self.engine.ae_jacobian(1.0, 1.0 if len(self.nonholonomic) else 0.0)[0][self.ae_keep]
 
     def at(self, q, t):
         """g(q, t) of the kept rows (0 on velocity-level rows)."""
@@ -162,8 +206,10 @@ class ConstraintRows:
         E.sd.SetTime(t)
         E.solver.ComputeAlgebraicEquations(E.mbs, False)
         g = np.array(E.solver.GetSystemResidual())[E.ae0:][self.ae_keep]
-        if self.velocity_rows:
-            g[list(self.velocity_rows)] = 0.0
+        if self.nonholonomic:
+            g[list(self.nonholonomic)] = 0.0
+        if self.ramp is not None:
+            g -= self._ramp_g(t)
         return g
 
     def gt_fd(self, q, t):
@@ -179,11 +225,14 @@ class ConstraintRows:
         if not self.velocity_level:                    # A V from the Jacobian, + ∂g/∂t
             self.engine.write(q, qd, t)
             r = self.Cq() @ qd
-            return r + self.gt_fd(q, t) if self.time_dependent else r
-        r = self.residual(q, qd, t, True)
-        if self.time_dependent and not self.exudyn_gt:
-            pos = self.position_rows
-            r[pos] += self.gt_fd(q, t)[pos] - self.residual(q, np.zeros(self.nodes.n2), t, True)[pos]
+            r = r + self.gt_fd(q, t) if self.time_dependent else r
+        else:
+            r = self.residual(q, qd, t, True)
+            if self.time_dependent and not self.exudyn_gt:
+                pos = self.holonomic_rows
+                r[pos] += self.gt_fd(q, t)[pos] - self.residual(q, np.zeros(self.nodes.n2), t, True)[pos]
+        if self.ramp is not None:
+            r += self.ramp[2] / self.ramp[1]
         return r
 
     def gamma(self, q, V, t):
@@ -207,8 +256,8 @@ class ConstraintRows:
         d1 = (phi[1] - 2 * phi[0] + phi[-1]) / e ** 2
         d2 = (phi[2] - 2 * phi[0] + phi[-2]) / (4 * e ** 2)
         gam = (4 * d1 - d2) / 3
-        if self.velocity_rows:
-            vr = list(self.velocity_rows)
+        if self.nonholonomic:
+            vr = list(self.nonholonomic)
             ev = EPS_GAMMA / max(1.0, float(np.abs(V).max()))
             cv = [self.residual(moved(q, V, k * ev), self.nodes.rates_from_twist(moved(q, V, k * ev), V),
                                 t + k * ev, True)[vr] for k in (1, -1)]
@@ -230,6 +279,7 @@ def project_initial(model, q0, V0, t0, tol=1e-12, max_iter=60):
     cons = model.cons
     if not cons.n:
         return q0, V0, None
+    # index 2 (useIndex2Constraints): no position rows, the positions stay where they are
     rows = np.array(sorted(cons.nodes.ep_ae) + [int(cons.ae_keep[k]) for k in cons.position_rows], int)
     n2 = cons.nodes.n2
     q2 = _project_positions(cons, q0[:n2], t0, rows, tol, max_iter)

@@ -103,7 +103,7 @@ def f_compiled(model, P, q, V, t):
     model.n_eval += 1
     if nc:
         A = P.A
-        constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.velocity_rows else 0.0), P.rows, A)
+        constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, A)
     else:
         A, gam = P.A0, P.gam0
     Vd = np.empty(P.nv)

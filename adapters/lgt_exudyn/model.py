@@ -34,7 +34,10 @@ class ExudynModel(Model):
     (:class:`.layout.NodeLayout`: the layout and velocity maps), ``cons``
     (:class:`.constraints.ConstraintRows`), ``ode1`` (:class:`.ode1.ODE1States`, or None);
     ``Mbar``: the twist mass matrix when it is constant (then Exudyn's is never evaluated
-    again), else None."""
+    again), else None. ``simulationSettings`` (optional): the user's; read are
+    ``timeIntegration.generalizedAlpha.useIndex2Constraints`` (``index2``: constraints on
+    velocities only, as Exudyn enforces them then) and the discontinuous iteration's
+    tolerance."""
 
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend
@@ -62,9 +65,13 @@ class ExudynModel(Model):
             i = int(np.flatnonzero(~np.isfinite(self.V0))[0])
             raise InputError(f"Exudyn initial velocities: entry {i} of {self.layout.owner('V', i)} is not "
                              "finite; fix the node's initial velocities.")
-        cons = self.cons = ConstraintRows(engine, nodes, self.q0, self.V0, self.t0)
-        self.n_constraints, self.velocity_rows = cons.n, cons.velocity_rows
-        self.time_dependent_constraints, self.redundant_rows = cons.time_dependent, cons.redundant_rows
+        #: Exudyn's generalizedAlpha.useIndex2Constraints: constraints on velocities only
+        self.index2 = bool(simulationSettings is not None
+                           and simulationSettings.timeIntegration.generalizedAlpha.useIndex2Constraints)
+        self.cons = ConstraintRows(engine, nodes, self.q0, self.V0, self.t0, self.index2)
+        self._take_rows()
+        # connectors a pre-step user function may switch (read once here, then each step)
+        self._connectors = self._connector_state() if _has_prestep(mbs) else None
         if sd.DataSize():
             # contact/friction states: Exudyn's own discontinuous iteration after each step
             self.post_step = self._post_newton
@@ -80,6 +87,123 @@ class ExudynModel(Model):
             # the adapter's Ḣ V term of Rxyz nodes (C_t was 170 % off on a spring-loaded Rxyz
             # body): generalized-α differences the step instead
             self.iteration_matrix = None
+
+    # ------------------------------------------------------------------ constraint rows
+    def _take_rows(self):
+        cons = self.cons
+        self.n_constraints, self.velocity_rows = cons.n, cons.velocity_rows
+        self.time_dependent_constraints, self.redundant_rows = cons.time_dependent, cons.redundant_rows
+
+    def _connector_state(self):
+        """What decides which AE rows are constraints and can be changed between steps:
+        ``activeConnector`` and ``constrainedAxes`` of every object owning AE rows."""
+        mbs, sd, out = self.mbs, self.sd, []
+        if not self.engine.nae:
+            return out
+        if getattr(self, "_ae_objects", None) is None:
+            self._ae_objects = []
+            for k in range(sd.NumberOfObjects()):
+                try:
+                    if len(sd.GetObjectLTGAE(k)):
+                        o = mbs.GetObject(k)
+                        self._ae_objects.append((k, [p for p in ("activeConnector", "constrainedAxes") if p in o]))
+                except Exception:                   # objects without algebraic equations
+                    pass
+        for k, params in self._ae_objects:
+            out.append(tuple(np.ravel(mbs.GetObjectParameter(k, p)).tolist() for p in params))
+        return out
+
+    @engine_call
+    def rows_changed(self, q, V, t):
+        """Re-classify the constraint rows at (q, V, t) when a connector was switched on or
+        off (or its ``constrainedAxes`` changed) since the last classification — a pre-step
+        user function did it; True when the rows changed (steppers built on the old rows
+        must be rebuilt)."""
+        state = self._connector_state()
+        if self._connectors is None or state == self._connectors:
+            self._connectors = state
+            return False
+        self._connectors = state
+        q2, V2 = q[:self.n2], V[:self.nv]
+        old = (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows)
+        self.cons = ConstraintRows(self.engine, self.nodes, q2, V2, t, self.index2)
+        self._take_rows()
+        self.write_back(q, V, t)
+        if old == (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows):
+            return False
+        self.reset_caches()
+        return True
+
+    @engine_call
+    def begin_step(self, q, t, h, g_end):
+        """At the start of an Exudyn step after its pre-step user function ran: a change of
+        the holonomic rows' residual at the unchanged state (an offset moved: a crane's
+        reeving, a ramped drive) against ``g_end`` (:meth:`holonomic_residual` where the last
+        step ended) is spread over the step as a time dependence (see
+        :meth:`.constraints.ConstraintRows.set_ramp`), so explicit steps follow it in
+        position and velocity instead of projecting a jump. Not with index 2 (Exudyn's
+        velocity-level rows do not see offsets). Velocity-level offsets are looked at again.
+        True when the step's velocity targets may have moved (a ramp, velocity offsets): the
+        step should start with its velocities on them."""
+        cons = self.cons
+        cons.set_ramp(0, 1, None)
+        if cons.nonholonomic:               # a velocity-level offset may have been set
+            cons.detect_velocity_offset(q[:self.n2], t)
+        if g_end is not None and not self.index2 and self.n_constraints and len(g_end) == cons.n:
+            jump = self.holonomic_residual(q, t) - g_end
+            if np.abs(jump).max() > 1e-14 * (1.0 + np.abs(g_end).max()):
+                cons.set_ramp(t, h, jump)
+        return cons.ramp is not None or cons.velocity_offset
+
+    @engine_call
+    def holonomic_residual(self, q, t):
+        """g(q, t) of the holonomic rows (0 on the others), without any ramp."""
+        if not self.n_constraints:
+            return np.zeros(0)
+        ramp, self.cons.ramp = self.cons.ramp, None
+        try:
+            return self.cons.at(q[:self.n2], t)
+        finally:
+            self.cons.ramp = ramp
+
+    @engine_call
+    def multipliers(self, q, V, t, Vd=None):
+        """λ of the kept rows at (q, V, t): the index-1 solve's Lagrange multipliers, in
+        Exudyn's convention (M q̈ + C_qᵀ λ = Q; A = C_q H, so the twist solve's λ is
+        Exudyn's), from Aᵀ λ = Q̄ - M̄ V̇ with V̇ = f(q, V, t) (given as ``Vd``, or evaluated)."""
+        if Vd is None:
+            Vd = self.f(q, V, t)
+        if not self.n_constraints:
+            return np.zeros(0)
+        q2, V2 = np.asarray(q[:self.n2], float), np.asarray(V[:self.nv], float)
+        if self._compiled:
+            Qb, Mb = self._forces_compiled(q2, V2, t)
+        else:
+            Mb, Qb = self._evaluate(q2, V2, t, need_gamma=False)[:2]
+        A = self._jacobian2(q2)
+        return np.linalg.lstsq(A.T, Qb - Mb @ Vd[:self.nv], rcond=None)[0]
+
+    @engine_call
+    def write_outputs(self, q, V, t, accelerations=True, multipliers=True):
+        """After an output step: the state, and what Exudyn's sensors and solution file read
+        besides it — the accelerations q̈_e (``accelerations``) and, in Exudyn's algebraic
+        coordinates, the Lagrange multipliers of that state (``multipliers``; joint forces:
+        ``ForceLocal`` sensors read them); rows set aside (inactive, redundant) and the
+        Euler-parameter normalizations (τ keeps quaternions unit: no reaction) get 0."""
+        nae = self.engine.nae if multipliers else 0
+        if not accelerations and not nae:
+            self.write_back(q, V, t)
+            return
+        Vd = self.f(q, V, t)
+        q2, V2 = q[:self.n2], V[:self.nv]
+        lam = self.multipliers(q, V, t, Vd) if nae else None
+        self.write_back(q, V, t)
+        if accelerations:
+            self.sd.SetODE2Coordinates_tt(self.nodes.H(q2) @ Vd[:self.nv] + self.nodes.Hdot_V(q2, V2))
+        if nae:
+            ae = np.zeros(nae)
+            ae[self.cons.ae_keep] = lam
+            self.sd.SetAECoordinates(ae)
 
     # ------------------------------------------------------------------ the parts' handles and maps
     @property
@@ -218,7 +342,7 @@ class ExudynModel(Model):
             return self.cons.Cq() @ self.nodes.H(q)
         P = self._pack()
         A = np.empty((self.n_constraints, self.nv))
-        C = self.engine.ae_jacobian_full(1.0, 1.0 if self.velocity_rows else 0.0)
+        C = self.engine.ae_jacobian_full(1.0, 1.0 if self.cons.nonholonomic else 0.0)
         self._kernels.constraint_matrix(P.T, P.off, P.w, np.ascontiguousarray(q, float), C, P.rows, A)
         return A
 
@@ -300,8 +424,9 @@ class ExudynModel(Model):
 
     @engine_call
     def velocity_rhs(self, q, t):
-        """b(q, t) in A V = b: -∂g/∂t of time-dependent rows (None otherwise)."""
-        if not self.time_dependent_constraints:
+        """b(q, t) in A V = b: -∂g/∂t of time-dependent rows, the offsets of velocity-level
+        rows (q̇ᵢ = c), a pre-step jump spread over the step (None when all are zero)."""
+        if not self.cons.has_rhs:
             return None
         return -self.cons.AV_at(q[:self.n2], np.zeros(self.nv), t)
 
@@ -397,6 +522,14 @@ class ExudynModel(Model):
                         raise err from exc
                 self.f = f
         return self._P
+
+
+def _has_prestep(mbs):
+    """True when the system has a pre-step user function (Exudyn returns 0 when unset)."""
+    try:
+        return bool(mbs.GetPreStepUserFunction())
+    except Exception:
+        return False
 
 
 def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):

@@ -9,8 +9,11 @@ needs, and interpolate Exudyn's output steps with their dense output.
 """
 import sys
 import time
+import warnings
 
-from lgt_bridge.errors import InputError, LGTError, StepError
+import numpy as np
+
+from lgt_bridge.errors import InputError, LGTError, ModelNote, StepError
 from lgt_bridge.integrators import registry
 from lgt_bridge.lgt import DEFAULT_GROUP
 from lgt_bridge.progress import simulation_bar
@@ -49,6 +52,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     - ``minimumStepSize`` (error control: a step the controller would shrink below it fails
       with StepError), ``initialStepSize`` (error control: the first trial step when > 0;
       0: the bridge's own starting-step estimate).
+    - ``generalizedAlpha.useIndex2Constraints``: True enforces the constraints on velocities
+      only, for every method (as Exudyn: an initial position violation stays, positions are
+      never projected); False (default): positions and velocities. Statistics:
+      ``constraints``.
     - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``; ``verbose``
       False silences it). ``realtime.active``/``simulateInRealtime``: ignored (one note).
 
@@ -62,15 +69,23 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     ``accelerations``: also write the engine's accelerations after each output step (one
     more f evaluation each); None (default): only when an output reads them (the solution
     file with accelerations exported, acceleration sensors, or sensors of objects, loads
-    and user functions, which may read forces). A failed step raises StepError with the
+    and user functions, which may read forces); likewise the Lagrange multipliers of
+    the state written, in Exudyn's algebraic coordinates (joint force sensors read them). A failed step raises StepError with the
     system at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
+
+    Pre-step user functions (``mbs.SetPreStepUserFunction``) may change the model between
+    Exudyn's steps: connectors switched on or off are classified again and the stepper
+    rebuilt (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step
+    as a time dependence (the explicit methods follow it in position and velocity). After
+    each output step the Lagrange multipliers of the state written are put into Exudyn's
+    algebraic coordinates (joint force sensors read them).
     """
     import exudyn as exu
     if simulationSettings is None:
         simulationSettings = exu.SimulationSettings()
     if not getattr(mbs, "systemIsConsistent", False) and autoAssemble:
         mbs.Assemble()
-    model = ExudynModel(mbs)
+    model = ExudynModel(mbs, simulationSettings)
     ti = simulationSettings.timeIntegration
     t0, t1, n = float(ti.startTime), float(ti.endTime), int(ti.numberOfSteps)
     if n <= 0:
@@ -114,7 +129,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if prestep else t1, project=project, rho_inf=rho_inf,
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), checked=True)
-    group, chart, stepper = sim.group, sim.chart, sim.stepper
+    group, chart = sim.group, sim.chart
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -125,32 +140,57 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             "there (a stiff, discontinuous or non-smooth model). Loosen the tolerances, lower "
                             "minimumStepSize, or use method='genalpha'.")
     first_step = sim.first_step
-    bar = simulation_bar(progress, t0, t1, sim, stepper, desc="SolveDynamic")
+    bar = simulation_bar(progress, t0, t1, sim, sim.stepper, desc="SolveDynamic")
     on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
     sd = mbs.systemData
     failure = []
     wall0 = time.perf_counter()
+    # pre-step user functions: the residual where the last step ended, to see offsets moved
+    g_end = [model.holonomic_residual(sim.q, sim.t)] if prestep else None
+    rebuilt = [0]
 
     def newton(solver, mbs_, settings):
         h = solver.it.currentStepSize
         ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
-        if prestep:                  # the model may have changed: no stage carried over
-            sim.restart()
         try:
+            if prestep:              # the model may have changed: no stage carried over
+                if model.rows_changed(sim.q, sim.V, sim.t):     # connectors switched on/off
+                    rep = sim.rebuild()
+                    rebuilt[0] += 1
+                    g_end[0] = None
+                    if rep is not None:
+                        warnings.warn(ModelNote(
+                            f"Exudyn model: constraints switched on at t = {sim.t:g} by the pre-step user "
+                            f"function are violated (positions by {rep['position_residual']:.3g}, velocities "
+                            f"by {rep['velocity_residual']:.3g}); the state was moved onto them (q by up to "
+                            f"{rep['position']:.3g}, V by up to {rep['velocity']:.3g}), as Exudyn's implicit "
+                            "solver closes them in its next step."), stacklevel=2)
+                else:
+                    sim.restart()
+                if model.begin_step(sim.q, sim.t, ts + h - sim.t, g_end[0]) and sim.stepper.projector is not None:
+                    # an offset moved: the velocities start on the new targets (Exudyn's
+                    # step applies the end time's offsets over the whole step)
+                    V = sim.stepper.projector.velocities(sim.q, sim.V, sim.t)[0]
+                    sim.stepper.set_state(sim.q, V)
             q_out, V_out = sim.advance_to(ts + h, on_step)
-        except LGTError as exc:           # a failed step: the simulation is at the last good one
-            failure.append(str(exc))
-            model.write_back(stepper.q, stepper.V, sim.t)
+            if prestep:
+                g_end[0] = model.holonomic_residual(q_out, ts + h)
+            # the state, and the accelerations (solution file, acceleration sensors) and
+            # Lagrange multipliers (joint force sensors) of that state where outputs read them,
+            # and for the final state
+            last = ts + h >= t1 - 1e-12 * max(1.0, abs(t1))
+            model.write_outputs(q_out, V_out, ts + h, accelerations or last, multipliers or last)
+        except (LGTError, np.linalg.LinAlgError) as exc:
+            failure.append(str(exc) if not isinstance(exc, np.linalg.LinAlgError)
+                           else f"a linear solve failed at t = {sim.t:.9g} ({exc}).")
+            model.write_back(sim.stepper.q, sim.stepper.V, sim.t)
             solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
             return True
-        model.write_back(q_out, V_out, ts + h)
-        if accelerations or (ts + h >= t1 - 1e-12 * max(1.0, abs(t1))):
-            # the outputs that read them, and the final state
-            sd.SetODE2Coordinates_tt(model.accelerations(q_out, V_out, ts + h))
         return True
 
-    if accelerations is None:
-        accelerations = _outputs_read_accelerations(mbs, simulationSettings)
+    reads = _outputs_read(mbs, simulationSettings)
+    accelerations = reads["accelerations"] if accelerations is None else accelerations
+    multipliers = reads["multipliers"]
     solver = exu.MainSolverImplicitSecondOrder()
     solver.SetUserFunctionNewton(mbs, newton)
     saved = [(ti, "automaticStepSize", auto_step)]
@@ -164,6 +204,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         for obj, name, value in saved:
             setattr(obj, name, value)
         bar.close()
+    stepper = sim.stepper
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,
               tolerance_source=tol_source if adaptive else None, dt=None if adaptive else h_out,
@@ -177,6 +218,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         st["initial_projection"] = sim.initial_projection
     if model.redundant_rows:
         st["redundant_constraints"] = len(model.redundant_rows)
+    if model.n_constraints or rebuilt[0]:
+        st["constraints"] = ("index 2: velocity level only, positions not projected "
+                             "(generalizedAlpha.useIndex2Constraints = True)" if model.index2 else
+                             "index 3: positions and velocities")
+    if rebuilt[0]:
+        st["constraint_rows_rebuilt"] = rebuilt[0]
     if stepper.projector is not None:
         st["constraint_after_projection"] = stepper.projector.max_after
     mbs.sys["lgtBridgeStats"] = st
@@ -194,23 +241,27 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
 
 
 #: sensors that read only positions, velocities and rotations of what they name (unless
-#: their output variable is an acceleration)
-_KINEMATIC_SENSORS = ("Node", "Marker", "Body")
+#: their output variable is an acceleration); loads read their own values
+_KINEMATIC_SENSORS = ("Node", "Marker", "Body", "Load")
 
 
-def _outputs_read_accelerations(mbs, settings):
-    """Whether an output reads the engine's accelerations between steps: the solution file
-    with accelerations exported, a sensor of an acceleration, or a sensor of an object, load,
-    superelement or user function (which may read forces)."""
+def _outputs_read(mbs, settings):
+    """{"accelerations": ..., "multipliers": ...}: whether an output reads the engine's
+    accelerations / Lagrange multipliers between steps: the solution file exporting them,
+    a sensor of an acceleration, a sensor of an object (joint forces) or a user-function
+    or other sensor (which may read either)."""
     sol = settings.solution
-    if sol.file.write and sol.file.export.accelerations:
-        return True
+    export = sol.file.export
+    acc = bool(sol.file.write and export.accelerations)
+    lam = bool(sol.file.write and export.algebraicCoordinates)
     for i in range(mbs.systemData.NumberOfSensors()):
         sensor = mbs.GetSensor(i)
         kind = sensor.get("outputVariableType")
-        if "Acceleration" in getattr(kind, "name", str(kind)) or sensor.get("sensorType") not in _KINEMATIC_SENSORS:
-            return True
-    return False
+        if "Acceleration" in getattr(kind, "name", str(kind)):
+            acc = True
+        if sensor.get("sensorType") not in _KINEMATIC_SENSORS:
+            acc = lam = True
+    return {"accelerations": acc, "multipliers": lam}
 
 
 def _has_user_function(mbs, getter):

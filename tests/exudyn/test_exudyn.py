@@ -336,13 +336,18 @@ def test_singular_mass_is_refused_before_the_first_step():
 
 def test_drop_in_writes_accelerations_only_where_an_output_reads_them(monkeypatch):
     """accelerations=None: an acceleration sensor gets the same values as with
-    accelerations=True; without such an output the accelerations (one f each) are computed
-    only for the final state, which still carries them."""
+    accelerations=True; without an output that reads them the accelerations (and the
+    Lagrange multipliers, one f each) are computed only for the final state, which still
+    carries them."""
     from exudyn.utilities import SensorNode
     from lgt_exudyn.model import ExudynModel as EM
     calls = []
-    original = EM.accelerations
-    monkeypatch.setattr(EM, "accelerations", lambda self, q, V, t: calls.append(t) or original(self, q, V, t))
+    original = EM.write_outputs
+
+    def spy(self, q, V, t, accelerations=True, multipliers=True):
+        calls.append((accelerations, multipliers))
+        return original(self, q, V, t, accelerations, multipliers)
+    monkeypatch.setattr(EM, "write_outputs", spy)
     T, n_out = 0.1, 200
     runs = {}
     for name, kind, acc in (("auto", exu.OutputVariableType.Acceleration, None),
@@ -354,7 +359,10 @@ def test_drop_in_writes_accelerations_only_where_an_output_reads_them(monkeypatc
         calls.clear()
         SolveDynamic(mbs, em.settings(T, n_out, sensors=True), method="dop853", rtol=1e-9, atol=1e-9,
                      accelerations=acc)
-        runs[name] = (mbs.GetSensorStoredData(sens), len(calls), mbs.systemData.GetODE2Coordinates_tt().copy())
+        runs[name] = (mbs.GetSensorStoredData(sens), [a for a, _ in calls], [m for _, m in calls],
+                      mbs.systemData.GetODE2Coordinates_tt().copy())
     assert np.array_equal(runs["auto"][0], runs["forced"][0])
-    assert runs["auto"][1] == runs["forced"][1] == n_out and runs["velocity"][1] == 1
-    assert np.abs(runs["velocity"][2] - runs["auto"][2]).max() < 1e-12 * (1 + np.abs(runs["auto"][2]).max())
+    assert len(runs["auto"][1]) == n_out and all(runs["auto"][1]) and all(runs["forced"][1])
+    velocity = runs["velocity"]
+    assert velocity[1] == [False] * (n_out - 1) + [True] and velocity[2] == [False] * (n_out - 1) + [True]
+    assert np.abs(velocity[3] - runs["auto"][3]).max() < 1e-12 * (1 + np.abs(runs["auto"][3]).max())
