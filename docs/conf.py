@@ -66,7 +66,7 @@ sphinx_gallery_conf = {
     "gallery_dirs": str(HERE / "auto_examples"),
     "filename_pattern": r"(?<!_long)\.py$",
     "ignore_pattern": r"__init__\.py",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": "ExampleTitleSortKey",   # "... as written today" before "... through the bridge"
     "download_all_examples": False,
     "remove_config_comments": True,
     "abort_on_example_error": False,
@@ -92,7 +92,7 @@ html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "navbar_align": "left",
-    "header_links_before_dropdown": 8,
+    "header_links_before_dropdown": 7,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
