@@ -60,11 +60,17 @@ numpydoc_xref_param_type = False
 intersphinx_mapping = {}                     # offline build: no inventories fetched
 
 # -- sphinx-gallery -------------------------------------------------------------------------
-# Every example runs at build time except files ending in ``_long.py`` (shown, not run).
+# Every example runs at build time except files ending in ``_long.py`` (shown, not run), and
+# those whose optional data is not installed (shown, not run, instead of failing the build).
+import importlib.util  # noqa: E402
+
+NOT_RUN = [r"[^/\\]*_long\.py"]
+if importlib.util.find_spec("example_robot_data") is None:       # the ``robots`` extra
+    NOT_RUN.append(r"plot_stiff_pd_radau5\.py")
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),
     "gallery_dirs": str(HERE / "auto_examples"),
-    "filename_pattern": r"(?<!_long)\.py$",
+    "filename_pattern": r"[/\\](?!(?:%s)$)[^/\\]+\.py$" % "|".join(NOT_RUN),
     "ignore_pattern": r"__init__\.py",
     "within_subsection_order": "ExampleTitleSortKey",   # "... as written today" before "... through the bridge"
     "download_all_examples": False,
