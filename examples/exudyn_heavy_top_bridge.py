@@ -1,5 +1,11 @@
-"""The same heavy top through the bridge: the model is untouched; only the solve call
+"""
+Exudyn heavy top, through the bridge
+====================================
+
+The same heavy top through the bridge: the model is untouched; only the solve call
 changes (compare with exudyn_heavy_top_legacy.py):
+
+.. code-block:: diff
 
     -mbs.SolveDynamic(simulationSettings)
     +from lgt_exudyn import SolveDynamic

@@ -1,5 +1,9 @@
-"""A heavy top as Exudyn users write it today: Euler-parameter node, spherical joint,
-sensors, and Exudyn's own generalized-α solver.
+"""
+Exudyn heavy top, as written today
+==================================
+
+A heavy top as Exudyn users write it today: Euler-parameter node, spherical joint,
+sensors, and Exudyn's own generalized-α solver::
 
     python examples/exudyn_heavy_top_legacy.py
     lgt-bridge run examples/exudyn_heavy_top_legacy.py --method dopri5   # same script, bridged

@@ -1,10 +1,14 @@
-"""The same floating humanoid through the bridge. The model is untouched; the loop
+"""
+Pinocchio humanoid, through the bridge
+======================================
+
+The same floating humanoid through the bridge. The model is untouched; the loop::
 
     for _ in range(n):
         v = v + dt * pin.aba(model, data, q, v, tau)
         q = pin.integrate(model, q, v * dt)
 
-becomes
+becomes::
 
     from lgt_bridge import simulate
     from lgt_pinocchio import PinocchioModel

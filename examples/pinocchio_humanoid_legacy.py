@@ -1,6 +1,10 @@
-"""A floating humanoid simulated the way Pinocchio users do it today: semi-implicit
+"""
+Pinocchio humanoid, as written today
+====================================
+
+A floating humanoid simulated the way Pinocchio users do it today: semi-implicit
 Euler with pin.integrate (zero gravity, zero torques, so the total momentum must stay
-constant; its drift measures the integrator).
+constant; its drift measures the integrator)::
 
     python examples/pinocchio_humanoid_legacy.py
 """

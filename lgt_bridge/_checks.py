@@ -108,6 +108,7 @@ def public(*specs):
             return res
         api.__name__ = fn.__name__.lstrip("_")
         api.__qualname__ = api.__name__
+        api.__module__ = fn.__module__       # documented (and pickled) as the group module's own
         api.__doc__ = fn.__doc__
         api.__wrapped__ = fn
         return api

@@ -4,7 +4,7 @@
 with principal inertias (Euler's equations J ω̇ = -ω × Jω), in Jacobi elliptic
 functions (Landau & Lifshitz, Mechanics §37). With the axes relabelled so that
 the "dn" axis c is the one the motion circulates around (the largest inertia if
-|L|² > 2 E J_mid, else the smallest), a the other extreme and b the middle:
+‖L‖² > 2 E J_mid, else the smallest), a the other extreme and b the middle:
 
     ω_a = A_a cn(u),  ω_b = s_b A_b sn(u),  ω_c = s A_c dn(u),   u = λ t + u0
     A_a² = (2E J_c - L²) / (J_a (J_c - J_a)),   A_b² = (2E J_c - L²) / (J_b (J_c - J_b)),
@@ -12,7 +12,7 @@ the "dn" axis c is the one the motion circulates around (the largest inertia if
     m = k² = (J_b - J_a)(2E J_c - L²) / ((J_c - J_b)(L² - 2E J_a)),
 
 s = sign ω_c(0), s_b = s ε sign(J_c - J_b) (ε the parity of (a, b, c)) and u0 from (cn u0, sn u0) at t = 0. Valid away from the
-separatrix |L|² = 2E J_mid.
+separatrix ‖L‖² = 2E J_mid.
 """
 import numpy as np
 from scipy.special import ellipj, ellipkinc

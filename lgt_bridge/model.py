@@ -63,7 +63,7 @@ class RigidBody:
         return self.param.validate(q[[*self.pos, *self.rot]], name)
 
 
-#: how far |(cos θ, sin θ)| of a circle coordinate may be from 1 in a given state
+#: how far ‖(cos θ, sin θ)‖ of a circle coordinate may be from 1 in a given state
 CIRCLE_NORM_TOL = 1e-6
 
 

@@ -14,7 +14,7 @@ previous value (DESIGN.md): the quaternion sign with p·p_prev > 0; the rotation
 vector of norm <= π (at exactly π, the sign nearest the previous); Tait-Bryan
 angles unwrapped to the branch and 2π shift nearest the previous angles.
 ``omega_from_rates``/``rates_from_omega`` map θ̇ <-> body angular velocity ω;
-they are singular where the parameterization is (|ρ| = 2π, cos θ1 = 0).
+they are singular where the parameterization is (‖ρ‖ = 2π, cos θ1 = 0).
 """
 import numpy as np
 
@@ -164,7 +164,7 @@ class Quaternion(Parameterization):
 
 
 class RotationVector(Parameterization):
-    """Rotation vector ρ + position, ν = 6; α⁻¹ keeps |ρ| <= π."""
+    """Rotation vector ρ + position, ν = 6; α⁻¹ keeps ‖ρ‖ <= π."""
 
     nrot = 3
     name = "rotvec"
@@ -199,7 +199,7 @@ class TaitBryanXYZ(Parameterization):
 
     nrot = 3
     name = "rxyz"
-    #: below this |cos θ1| the split of θ0 + θ2 is taken from the previous θ0
+    #: below this abs(cos θ1) the split of θ0 + θ2 is taken from the previous θ0
     GIMBAL_TOL = 1e-9
 
     def _to_quat(self, rot):

@@ -8,7 +8,7 @@ mapped to twist coordinates through q̇_e = H(q) V:
 
     M̄ = Hᵀ M H,   Q̄ = Hᵀ (Q - M Ḣ V),   A = C_q H,   γ = d/dt(A V)|_V
 
-with the constraint rows and γ from :mod:`.constraints`. This module composes those parts
+with the constraint rows and γ from :mod:`lgt_exudyn.constraints`. This module composes those parts
 into the ``Model`` protocol; the compiled backend runs f through :mod:`.kernels`.
 """
 import numpy as np

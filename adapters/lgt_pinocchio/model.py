@@ -7,7 +7,7 @@ q is Pinocchio's own configuration vector; V holds the bridge's twists. The mode
   rotation of a planar joint) and vector-space blocks, i.e. the bridge's Layout, and the maps
   between Pinocchio's v and V (v = T(q) V);
 * :mod:`.loads` — the user's tau, tau_derivatives and fext, checked and converted;
-* :mod:`.constraints` — RigidConstraintModels (and Pinocchio 4's point and frame anchors): f from
+* :mod:`lgt_pinocchio.constraints` — RigidConstraintModels (and Pinocchio 4's point and frame anchors): f from
   constraintDynamics, g, A from Pinocchio's frame Jacobians and γ from its frame accelerations;
   default anchors, redundant rows, unclosed loops (:meth:`PinocchioModel.project_initial`) and
   passages near singular configurations (:meth:`PinocchioModel.write_back`);

@@ -42,15 +42,15 @@ def pose_errors(model, q, q_ref):
 
 def end_errors(model, q, q_ref, V=None, V_ref=None):
     """A run's end state against the reference: ``pose_error`` (:func:`pose_error`),
-    ``velocity_error`` (largest |V - V_ref|; None without V) and ``constraint_residual``
-    (largest |g(q)|; 0 for a model without constraints)."""
+    ``velocity_error`` (largest ‖V - V_ref‖; None without V) and ``constraint_residual``
+    (largest ‖g(q)‖; 0 for a model without constraints)."""
     return dict(pose_error=pose_error(model, q, q_ref),
                 velocity_error=None if V is None else float(np.abs(V - V_ref).max()),
                 constraint_residual=float(np.abs(model.constraints(q)).max()) if model.n_constraints else 0.0)
 
 
 def energy_drift(model, t, q, V, success):
-    """Relative energy drift |E - E0| / |E0| at up to 60 of a run's output times:
+    """Relative energy drift abs(E - E0) / abs(E0) at up to 60 of a run's output times:
     ``energy_t``, ``energy_drift_t`` and, for a run that succeeded, ``energy_drift`` at
     its end; {} for a model without ``energy`` or a run without output."""
     if not (hasattr(model, "energy") and len(t)):

@@ -1,6 +1,6 @@
-"""The Cayley chart: ψ(c) = (I − ĉ)⁻¹(I + ĉ), |c| = tan(φ/2) (Gibbs vectors); rational,
+"""The Cayley chart: ψ(c) = (I − ĉ)⁻¹(I + ĉ), ‖c‖ = tan(φ/2) (Gibbs vectors); rational,
 no trigonometric functions, singular at a half-turn, so one stage may rotate a body by at
-most 90° (|c| ≤ 1)."""
+most 90° (‖c‖ ≤ 1)."""
 import math
 
 import numpy as np

@@ -2,13 +2,13 @@
 
 The paper ("Remarks on coordinate maps") notes that a Cayley chart cannot describe large
 rotations within a step and that the squared Cayley map mitigates this on SO(3) and SE(3).
-With the Cayley map of :mod:`lgt_bridge.groups` (cay(c) = (I − ĉ)⁻¹(I + ĉ), angle 2·atan|c|),
-cay2(x) = cay(x/2)² rotates by φ = 4·atan(|x|/2), so |x| = 2·tan(φ/4): the chart covers
+With the Cayley map of :mod:`lgt_bridge.groups` (cay(c) = (I − ĉ)⁻¹(I + ĉ), angle 2·atan‖c‖),
+cay2(x) = cay(x/2)² rotates by φ = 4·atan(‖x‖/2), so ‖x‖ = 2·tan(φ/4): the chart covers
 every rotation below a full turn (Cayley: below a half-turn), and near the identity it
-agrees with the Cayley chart to second order (log ψ(X) = 2X + O(|X|³), scale ½).
+agrees with the Cayley chart to second order (log ψ(X) = 2X + O(‖X‖³), scale ½).
 
 Derived here, each checked in tests against its definition (matrix products of cay,
-finite differences of ψ, mpmath near the limit), with s = |x|², a = x/2:
+finite differences of ψ, mpmath near the limit), with s = ‖x‖², a = x/2::
 
     quaternion   p = ((4 − s), 4x)/(4 + s)            (the square of (2, x)/√(4 + s); unit,
                                                         rational: no square root)
@@ -25,7 +25,7 @@ finite differences of ψ, mpmath near the limit), with s = |x|², a = x/2:
                           (I + Ad_{(R₁,t₁)})⁻¹ (ω, v) = (P ω, P (v − t₁ × R₁ P ω)),  P = ½ (I − ã)
     SO(3)xR³     (ψ(x), y), dψ = diag(dψ_x, I)
 
-One stage may rotate a body by at most 240° (|x| ≤ 2·tan 60° = 2√3); a step of 1.2π per
+One stage may rotate a body by at most 240° (‖x‖ ≤ 2·tan 60° = 2√3); a step of 1.2π per
 step runs, where the Cayley chart must refuse it or shrink it.
 """
 import math

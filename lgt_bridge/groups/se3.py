@@ -1,5 +1,7 @@
 """SE(3) with twists ordered (ω, v), elements as 4x4 homogeneous matrices.
 
+::
+
     exp X  = [exp x~, dexp_x y; 0, 1]                      (paper eq. expSE31)
     dexp_X⁻¹ = [dexp_x⁻¹, 0; B(y), dexp_x⁻¹]               (eq. dexpInvSE3)
         B(y) = -½ y~ + d(φ) (x~ y~ + y~ x~) + e(φ) (xᵀy) x~²

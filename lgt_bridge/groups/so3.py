@@ -1,11 +1,13 @@
 """SO(3): exp/log, Cayley map and inverse, right-trivialized differentials, BCH.
 
-Conventions (paper section 3, corrected in docs/paper_corrections.md):
+Conventions (paper section 3, corrected in docs/paper_corrections.md)::
+
     exp x~   = I + sinc φ x~ + ½ β x~²                       β = sinc²(φ/2)
     dexp_x   = I + ½ β x~ + c3(φ) x~²                          c3 = (1 - sinc φ)/φ²
     dexp_x⁻¹ = I - ½ x~ + d(φ) x~²                             d = (1 - γ)/φ², γ = sinc φ/β
     cay c~   = I + σ (c~ + c~²) = (I - c~)⁻¹ (I + c~)          σ = 2/(1+|c|²)
     dcay_c   = σ (I + c~),   dcay_c⁻¹ = I/σ + ½ (c~² - c~)
+
 Right-trivialized: (D_x ψ)(y) ψ(x)⁻¹ = (dψ_x y)~. Body angular velocity of
 R(t) = R_k ψ(x(t)) is ω = dψ_{-x} ẋ.
 """

@@ -2,7 +2,8 @@
 
 Elements are stored as 4x4 arrays [R, r; 0, 1] like SE(3), but multiply with
 the direct-product law (R1, r1)(R2, r2) = (R1 R2, r1 + r2); the translation of
-a chart increment is therefore resolved in the inertial frame (docs/paper_corrections.md, rprime2).
+a chart increment is therefore resolved in the inertial frame (docs/paper_corrections.md, rprime2)::
+
     exp X = (exp x~, y),  cay X = (cay c~, d),  dψ_X = diag(dψ_x, I).
 """
 import numpy as np

@@ -35,7 +35,7 @@ HEAVY_TOP = dict(m=15.0, J_com=np.diag([0.234375, 0.46875, 0.234375]), com=np.ar
 def heavy_top(constrained=False, *, param="quat", omega0=None, R0=None):
     """The heavy top benchmark (m = 15, centre of mass (0, 1, 0) from the pivot).
 
-    constrained=False: body frame at the pivot, J = J_com + m(|c|²I - ccᵀ), rotation only.
+    constrained=False: body frame at the pivot, J = J_com + m(‖c‖²I - ccᵀ), rotation only.
     constrained=True: body frame at the centre of mass, spherical joint to ground at the pivot.
     """
     param = _params.get(param)
