@@ -1,9 +1,13 @@
-"""Events on an engine-free model: the period of a large-amplitude compound pendulum from its
+"""
+Events: a pendulum's period
+===========================
+
+Events on an engine-free model: the period of a large-amplitude compound pendulum from its
 successive passes through the vertical, against the exact 4 K(sin²(θ0/2)) √(l/g).
 
 g(t, q, V) = x of the centre of mass (zero at the vertical), with ``direction = +1``: one
 crossing per period. Every crossing is located on the step's continuous extension through
-τ — dop853's dense output; rkmk4's cubic Hermite interpolant of (X, W) within the step.
+τ — dop853's dense output; rkmk4's cubic Hermite interpolant of (X, W) within the step::
 
     python examples/events_pendulum_period.py
 """

@@ -1,4 +1,8 @@
-"""Events on a Pinocchio model: Solo-12 (example-robot-data) dropped from 0.3 m, its base
+"""
+Events: a quadruped's first touchdown
+=====================================
+
+Events on a Pinocchio model: Solo-12 (example-robot-data) dropped from 0.3 m, its base
 rolled by 0.05 rad and pitched by 0.2 rad and its knees folded 0.4 rad beyond the standing
 pose, under joint-space PD control towards that pose, stopping when a foot first touches
 the ground.
@@ -8,7 +12,7 @@ itself (g may call the engine: q is Pinocchio's own configuration; v would come 
 ``m.pin_state(q, V)``).
 Each is terminal and fires going down (``direction = -1``): the run ends at the first
 touchdown, located on the step's continuous extension through τ to the run's tolerances,
-with the model written back there; ``result.message`` names the foot.
+with the model written back there; ``result.message`` names the foot::
 
     python examples/events_quadruped_drop.py
 """
