@@ -56,7 +56,8 @@ def _note_initial_projection(rep, t0):
 class Simulation:
     """A model on a method, set up once (see the module docstring). Options as
     :func:`~lgt_bridge.simulate`; ``t_end``: the end of the run, when known (adaptive
-    methods with dense output then step freely up to it); ``fixed_steps``: an adaptive pair
+    methods with dense output then step freely up to it); ``max_step``: the largest step an
+    adaptive method may take (None: no cap); ``fixed_steps``: an adaptive pair
     runs fixed steps of ``dt`` with its own tableau; ``min_step`` (> 0): an error-controlled
     step shrinking below it ends the run, with ``min_step_why`` as the advice.
 
@@ -68,7 +69,10 @@ class Simulation:
 
     def __init__(self, model, *, method="rkmk4", group="SE3", chart="exp", dt=None, rtol=1e-6,
                  atol=1e-8, t0=0.0, t_end=None, q0=None, V0=None, max_steps=1_000_000, project=True,
-                 rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, checked=False):
+                 rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, max_step=None,
+                 checked=False):
+        if max_step is not None and not (float(max_step) > 0.0):
+            raise InputError(f"max_step = {max_step} must be positive (None: no cap).")
         if not checked:
             check_options(method, dt, rtol, atol, max_steps)
             q0, V0 = check_state(model, q0, V0)
@@ -86,6 +90,7 @@ class Simulation:
                                    project=project, rho_inf=rho_inf, newton_tol=newton_tol, span=span,
                                    fixed_steps=fixed_steps)
         self._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, project)
+        self.set_max_step(max_step)
         if min_step > 0:
             stepper.min_step = min_step
         self.min_step = min_step if stepper.adaptive else 0.0
@@ -101,8 +106,16 @@ class Simulation:
         sim._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent)
         return sim
 
+    def set_max_step(self, max_step):
+        """The largest step an adaptive method may take (None: no cap). The step controller
+        never proposes more; output times still come from dense output."""
+        self.max_step = float(max_step) if (max_step is not None and self.stepper.adaptive) else np.inf
+        self.h = min(self.h, self.max_step)
+        self.first_step = self.h
+
     def _setup(self, model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent):
         self.model, self.stepper = model, stepper
+        self.max_step = np.inf
         self._post = getattr(model, "post_step", None)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
         self.t_end = t_end
@@ -179,7 +192,7 @@ class Simulation:
             self.t = target if hit else self.t + h_try
             self.model.write_back(st.q, st.V, self.t)
             if st.adaptive:
-                self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
+                self.h = min(max(h_new, self.h) if hit and h_new < self.h else h_new, self.max_step)
             else:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:

@@ -364,7 +364,11 @@ class ExudynModel(Model):
         A = self._jacobian2(q2) if self.n_constraints else None
         d = mass_defects(M, A)
         if d:
-            raise InputError(mass_message(d, [self.nodes.layout.owner("V", i) for i, _ in d]))
+            raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
+                             + " Exudyn's implicit solvers (generalized-α) can run such a model, since "
+                             "their iteration matrix includes the stiffness; run it with Exudyn's own "
+                             "exu.SolveDynamic, or give these coordinates mass (an ANCF beam's "
+                             "sectionData.inertia: no zero entry).")
 
     # ------------------------------------------------------------------ compiled backend
     def reset_caches(self):

@@ -1,0 +1,117 @@
+"""Issue 21, Exudyn solver classes: models as Exudyn's users write them
+(tests/models/exudyn_solver_models.py), run through ``lgt_exudyn.SolveDynamic`` and
+compared with Exudyn's own solver refined until converged (or with the exact solution)."""
+import numpy as np
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from lgt_bridge import InputError  # noqa: E402
+from lgt_exudyn import SolveDynamic  # noqa: E402
+
+import exudyn_solver_models as sm  # noqa: E402
+
+
+# --- item 2: ANCF elements with damping: mass blocks -------------------------------------------
+
+def _tip(mbs, node):
+    return np.array(mbs.GetNodeOutput(node, exu.OutputVariableType.Position))
+
+
+def _exudyn_tip(n):
+    mbs, s, tip = sm.ancf_cable_damped()
+    s.timeIntegration.numberOfSteps = n
+    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    return _tip(mbs, tip)
+
+
+def test_damped_ancf_cable_runs_as_exudyns_converged_solver():
+    """The damped ANCF cable (ANCFCableBeamDampingTest's Cable2D, GenerateStraightLineANCFCable2D)
+    runs on dopri5 and agrees with Exudyn's generalized-α refined until converged (second
+    order: 1600 and 3200 steps differ by < 1e-9, Richardson-extrapolated)."""
+    fine, finer = _exudyn_tip(1600), _exudyn_tip(3200)
+    ref = finer + (finer - fine) / 3.0
+    assert np.abs(finer - fine).max() < 1e-8
+    mbs, s, tip = sm.ancf_cable_damped()
+    SolveDynamic(mbs, s, method="dopri5", rtol=1e-10, atol=1e-10)
+    assert mbs.sys["lgtBridgeStats"]["success"]
+    assert np.abs(_tip(mbs, tip) - ref).max() < 1e-8, (_tip(mbs, tip), ref)
+
+
+@pytest.mark.parametrize("method", ["dopri5", "genalpha"])
+def test_ancf_beam_without_torsional_inertia_is_refused_before_the_first_step(method):
+    """The ANCF beam of the same test has sectionData.inertia = diag(0, ρI, ρI): its mass
+    matrix is singular as a whole (not only per block). The packing used to raise numpy's
+    raw LinAlgError('Singular matrix'); now the model is refused before any step, naming the
+    object, the nodes and the reason."""
+    mbs, s = sm.ancf_beam_zero_torsion_inertia()
+    with pytest.raises(InputError) as exc:
+        SolveDynamic(mbs, s, method=method)
+    msg = str(exc.value)
+    assert "mass matrix at q0 is singular" in msg
+    assert "ObjectANCFBeam" in msg and "NodePointSlope23" in msg
+    assert "exu.SolveDynamic" in msg
+
+
+def test_pack_falls_back_to_the_whole_matrix_when_a_block_has_no_inverse():
+    """A constant M̄ whose diagonal block is not positive definite is not inverted block by
+    block (which raised LinAlgError): the pack factorizes the whole matrix at each f instead."""
+    from lgt_exudyn import ExudynModel
+    from lgt_exudyn.kernel_tables import pack
+    mbs, s, tip = sm.ancf_cable_damped()
+    m = ExudynModel(mbs)
+    assert pack(m).constant_mass
+    m.Mbar = m.Mbar.copy()
+    m.Mbar[0, :] = m.Mbar[:, 0] = 0.0
+    assert not pack(m).constant_mass
+
+
+# --- item 6: Exudyn's maximum step under automaticStepSize ------------------------------------
+
+def test_load_pulse_is_not_stepped_over():
+    """A 0.05 s load pulse in a 50 s run: Exudyn's DOPRI5 never steps further than
+    endTime/numberOfSteps (its documented maximum step) and sees it; so does the drop-in by
+    default (the bridge used to take 5 steps and end at rest)."""
+    v_exact, x_exact = sm.load_pulse_exact()
+    mbs, s, nd = sm.load_pulse()
+    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.DOPRI5)
+    v_exu = mbs.systemData.GetODE2Coordinates_t()[0]
+    assert abs(v_exu - v_exact) < 1e-4
+    mbs, s, nd = sm.load_pulse()
+    SolveDynamic(mbs, s, method="dopri5")
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and st["maximum_step"] == pytest.approx(0.05)
+    assert st["n_steps"] >= 1000
+    assert abs(mbs.systemData.GetODE2Coordinates_t()[0] - v_exact) < 1e-5
+    assert abs(mbs.systemData.GetODE2Coordinates()[0] - x_exact) < 1e-3
+    assert abs(mbs.systemData.GetODE2Coordinates()[0] - x_exact) <= abs(
+        float(_exu_x()) - x_exact) + 1e-4
+
+
+def _exu_x():
+    mbs, s, nd = sm.load_pulse()
+    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.DOPRI5)
+    return mbs.systemData.GetODE2Coordinates()[0]
+
+
+def test_max_step_none_lifts_the_cap():
+    """max_step=None (documented) lets the error control alone choose the steps: on this
+    model it then steps over the pulse, as the bridge did before."""
+    mbs, s, nd = sm.load_pulse()
+    SolveDynamic(mbs, s, method="dopri5", max_step=None)
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and st["maximum_step"] is None and st["n_steps"] < 50
+    assert mbs.systemData.GetODE2Coordinates_t()[0] == 0.0
+
+
+def test_max_step_in_simulate_caps_the_steps_and_keeps_dense_output():
+    from lgt_exudyn import ExudynModel
+    from lgt_bridge.simulate import simulate
+    mbs, s, nd = sm.load_pulse()
+    t_eval = np.linspace(0, 50, 11)
+    r = simulate(ExudynModel(mbs), (0, 50), method="dopri5", max_step=0.05, t_eval=t_eval,
+                 rtol=1e-8, atol=1e-8)
+    assert r.success and r.stats["n_steps"] >= 1000 and len(r.t) == 11
+    assert abs(r.V[-1][0] - sm.load_pulse_exact()[0]) < 1e-5
+    with pytest.raises(InputError):
+        simulate(ExudynModel(sm.load_pulse()[0]), (0, 1), method="dopri5", max_step=0.0)
