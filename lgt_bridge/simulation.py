@@ -118,6 +118,7 @@ class Simulation:
         self.max_step = np.inf
         self._post = getattr(model, "post_step", None)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
+        self._t_start = float(t0)
         self.t_end = t_end
         self.dense = stepper.dense_capable and t_end is not None
         self.n_steps = 0
@@ -173,7 +174,7 @@ class Simulation:
     def _step(self, target, on_step):
         st = self.stepper
         if self.n_steps >= self.max_steps:
-            raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
+            raise StepFailed(self._max_steps_message())
         h_before = self.h
         h_try = min(self.h, target - self.t)
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
@@ -205,6 +206,29 @@ class Simulation:
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
             raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
                              f"{self.min_step_name} = {self.min_step:g}: " + self.min_step_why)
+
+    def _max_steps_message(self):
+        """What reaching max_steps means: the mean step so far, the steps the rest of the run
+        would need at it, and for an explicit method the likely cause (a stiff model keeps an
+        explicit method's steps at its stability limit) and what to use instead."""
+        from .integrators import registry
+        msg = f"max_steps = {self.max_steps} reached at t = {self.t:.9g}."
+        t_end = self.t_end
+        if self.n_steps and t_end is not None and self.t > self._t_start:
+            h_mean = (self.t - self._t_start) / self.n_steps
+            msg += (f" The mean step so far is {h_mean:.3g} s; the rest of the run to t = {t_end:.9g} would "
+                    f"need about {int(np.ceil((t_end - self.t) / h_mean)):d} more steps.")
+        try:
+            spec = registry.get(self.method)
+        except Exception:
+            spec = None
+        if spec is not None and not spec.implicit:
+            msg += (" If the model is stiff (a stiff spring or contact, a flexible body such as an ANCF "
+                    "cable, sign(v) friction), an explicit method's steps sit at its stability limit "
+                    "whatever the tolerances: use method='radau5' or method='genalpha'.")
+        else:
+            msg += " Raise max_steps, or loosen the tolerances (or lengthen dt)."
+        return msg
 
     def _attempt_discontinuous(self, h, post):
         """A step of a model with discontinuous states (contact, friction: the model's

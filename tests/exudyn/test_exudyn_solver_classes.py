@@ -115,3 +115,19 @@ def test_max_step_in_simulate_caps_the_steps_and_keeps_dense_output():
     assert abs(r.V[-1][0] - sm.load_pulse_exact()[0]) < 1e-5
     with pytest.raises(InputError):
         simulate(ExudynModel(sm.load_pulse()[0]), (0, 1), method="dopri5", max_step=0.0)
+
+
+# --- item 10: stiff models on an explicit method ----------------------------------------------
+
+def test_max_steps_on_a_stiff_spring_chain_says_why_and_what_to_use():
+    """A 1e7 N/m spring chain on dopri5: reaching max_steps ends the run cleanly (steps kept)
+    with a message that ends in a full stop, gives the steps the run would still need and
+    points to radau5/genalpha."""
+    from lgt_exudyn import ExudynModel
+    from lgt_bridge.simulate import simulate
+    mbs, s = sm.stiff_spring_chain()
+    r = simulate(ExudynModel(mbs), (0, 1.0), method="dopri5", max_steps=300)
+    assert not r.success and r.stats["n_steps"] == 300 and len(r.t) == 301
+    msg = r.message
+    assert msg.startswith("max_steps = 300 reached at t = ") and msg.endswith(".")
+    assert "more steps" in msg and "radau5" in msg and "genalpha" in msg
