@@ -95,9 +95,12 @@ class NodeLayout:
         objs = []
         for o in range(mbs.systemData.NumberOfObjects()):
             od = mbs.GetObject(o)
-            nn = od.get("nodeNumbers", od.get("nodeNumber", []))
-            nn = [nn] if np.isscalar(nn) else list(nn)
-            if node in [int(k) for k in nn]:
+            nn = od.get("nodeNumbers", od.get("nodeNumber"))
+            try:
+                nn = [int(k) for k in nn]
+            except TypeError:                       # one NodeIndex, or None
+                nn = [] if nn is None else [int(nn)]
+            if node in nn:
                 typ_o = str(od.get("objectType", ""))
                 objs.append((typ_o if typ_o.startswith("Object") else "Object" + typ_o, o))
         where = ""
