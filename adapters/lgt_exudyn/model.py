@@ -130,7 +130,13 @@ class ExudynModel(Model):
         friction states updated from the state (q, V, t)); True when they changed by more
         than timeIntegration.discontinuous.iterationTolerance."""
         self.write_back(q, V, t)
-        return float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol
+        d0 = np.array(self.sd.GetDataCoordinates())
+        if float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol:
+            return True
+        # a data coordinate that changes sign (a contact gap closing or opening) is a switch
+        # however small the change: otherwise the step that crosses it keeps the old state
+        d1 = np.array(self.sd.GetDataCoordinates())
+        return bool(np.any(d0 * d1 < 0.0))
 
     def discontinuous_state(self):
         return np.array(self.sd.GetDataCoordinates())
