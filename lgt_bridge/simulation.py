@@ -119,6 +119,7 @@ class Simulation:
         self._post = getattr(model, "post_step", None)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
         self._t_start = float(t0)
+        self._q_start = np.array(q0, float)
         self.t_end = t_end
         self.dense = stepper.dense_capable and t_end is not None
         self.n_steps = 0
@@ -205,7 +206,44 @@ class Simulation:
         if (self.h < self.min_step and self.h < h_before
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
             raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
-                             f"{self.min_step_name} = {self.min_step:g}: " + self.min_step_why)
+                             f"{self.min_step_name} = {self.min_step:g}: "
+                             + (self._singular_configuration() or self.min_step_why))
+
+    #: a singular value of the constraint Jacobian below this fraction of the largest (and
+    #: not already at the start) marks a singular configuration
+    SINGULAR_RATIO = 1e-3
+
+    def _singular_configuration(self):
+        """Why an explicit method's steps collapsed, when the cause is a singular configuration
+        of a mechanism (its constraint Jacobian A loses rank: bars in line, a linkage at a dead
+        point): the index-1 accelerations there respond to the smallest error of a stage's
+        state as 1/σ², so the explicit steps shrink with the distance to it and cannot cross.
+        None when A keeps its rank (and for unconstrained models and index-3 methods)."""
+        m, st = self.model, self.stepper
+        if not m.n_constraints or st.projector is None:
+            return None
+        try:
+            U, sv, _ = np.linalg.svd(np.asarray(m.constraint_jacobian(st.q), float))
+            sv0 = np.linalg.svd(np.asarray(m.constraint_jacobian(self._q_start), float), compute_uv=False)
+        except Exception:
+            return None
+        top, top0 = float(sv.max(initial=0.0)), float(sv0.max(initial=0.0))
+        if top == 0.0:
+            return None
+        small = np.flatnonzero(sv < self.SINGULAR_RATIO * top)
+        n0 = int((sv0 < self.SINGULAR_RATIO * top0).sum())     # redundant from the start
+        if len(small) <= n0:
+            return None
+        k = int(small[0])
+        rows = [int(i) for i in np.argsort(-np.abs(U[:, k]))[:4] if abs(U[i, k]) > 0.2]
+        own = getattr(m, "constraint_owners", None)
+        who = own(rows) if own is not None else f"constraint rows {rows}"
+        return (f"the mechanism is at a singular configuration there (the constraint Jacobian's smallest "
+                f"singular value is {sv[k]:.2g}, {sv[k] / top:.1g} of its largest; mostly {who}). Its "
+                "index-1 accelerations respond to the smallest error of a stage's state as 1/σ², so an "
+                "explicit method's steps shrink with the distance to it and cannot cross it at this "
+                "tolerance. Use method='genalpha' (index 3, as Exudyn's own solver), or loosen the "
+                "tolerances.")
 
     def _max_steps_message(self):
         """What reaching max_steps means: the mean step so far, the steps the rest of the run

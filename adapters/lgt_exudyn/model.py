@@ -294,6 +294,10 @@ class ExudynModel(Model):
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
+    def constraint_owners(self, rows):
+        """The Exudyn objects owning the model's constraint ``rows`` (for messages)."""
+        return self.engine.ae_owners([int(self.cons.ae_keep[i]) for i in rows])
+
     def constraints(self, q):
         return self.constraints_at(q, self.sd.GetTime())
 
