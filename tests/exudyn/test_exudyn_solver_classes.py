@@ -131,3 +131,69 @@ def test_max_steps_on_a_stiff_spring_chain_says_why_and_what_to_use():
     msg = r.message
     assert msg.startswith("max_steps = 300 reached at t = ") and msg.endswith(".")
     assert "more steps" in msg and "radau5" in msg and "genalpha" in msg
+
+
+# --- item 3: error control at tight tolerances on constrained models ---------------------------
+
+def _q_total(mbs):
+    sd = mbs.systemData
+    return np.array(sd.GetODE2Coordinates()) + np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
+
+
+def test_pickled_pendulum_error_falls_with_the_tolerance_down_to_1e_12():
+    """A pendulum copied by pickling, dopri5 at rtol = atol from 1e-8 to 1e-12: every run
+    succeeds and the error against dop853 at 1e-13 falls with the tolerance (measured 1.0e-9,
+    1.0e-10, 1.0e-11, 1.1e-12); the reference agrees with Exudyn's own generalized-α refined
+    (ρ∞ = 1, 2000/4000 steps, Richardson-extrapolated) to the 1e-8 that reference holds."""
+    mbs, s = sm.pickled_pendulum()
+    SolveDynamic(mbs, s, method="dop853", rtol=1e-13, atol=1e-13)
+    ref = _q_total(mbs)
+    exu_q = []
+    for n in (2000, 4000):
+        mbs, s = sm.pickled_pendulum()
+        s.timeIntegration.numberOfSteps = n
+        s.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+        mbs.SolveDynamic(s)
+        exu_q.append(_q_total(mbs))
+    assert np.abs(exu_q[1] + (exu_q[1] - exu_q[0]) / 3 - ref).max() < 1e-8
+    errs = []
+    for tol in (1e-8, 1e-10, 1e-11, 1e-12):
+        mbs, s = sm.pickled_pendulum()
+        SolveDynamic(mbs, s, method="dopri5", rtol=tol, atol=tol)
+        assert mbs.sys["lgtBridgeStats"]["success"]
+        errs.append(np.abs(_q_total(mbs) - ref).max())
+    assert all(b < 0.5 * a for a, b in zip(errs, errs[1:])), errs
+    assert errs[-1] < 1e-11, errs
+
+
+def _iftomm_exudyn_reference():
+    qs = []
+    for n in (2000, 4000):
+        mbs, s = sm.iftomm_double_fourbar(1.0, n)
+        s.timeIntegration.generalizedAlpha.spectralRadius = 0.95
+        mbs.SolveDynamic(s)
+        qs.append(_q_total(mbs))
+    return qs[1] + (qs[1] - qs[0]) / 3, np.abs(qs[1] - qs[0]).max()
+
+
+def test_iftomm_double_fourbar_runs_and_a_singular_configuration_is_named():
+    """Exudyn's IFToMM double four-bar passes a singular configuration (bars in line) at
+    t ≈ 0.714. dopri5 at 1e-10 runs and agrees with Exudyn's refined generalized-α; genalpha
+    runs it at 1000 steps. At 1e-12 dopri5 cannot cross the point (its index-1 accelerations
+    respond to a stage's state errors as 1/σ²): the run stops with a StepError that names the
+    singular configuration and its joints and points to genalpha, not with a bare
+    'the step size fell'."""
+    from lgt_bridge import StepError
+    ref, spread = _iftomm_exudyn_reference()
+    mbs, s = sm.iftomm_double_fourbar(1.0, 100)
+    SolveDynamic(mbs, s, method="dopri5", rtol=1e-10, atol=1e-10)
+    assert np.abs(_q_total(mbs) - ref).max() < max(1e-7, spread)
+    mbs, s = sm.iftomm_double_fourbar(1.0, 1000)
+    SolveDynamic(mbs, s, method="genalpha")
+    assert np.abs(_q_total(mbs) - ref).max() < 1e-3
+    mbs, s = sm.iftomm_double_fourbar(1.0, 100)
+    with pytest.raises(StepError) as exc:
+        SolveDynamic(mbs, s, method="dopri5", rtol=1e-12, atol=1e-12)
+    msg = str(exc.value)
+    assert "singular configuration" in msg and "JointRevolute2D" in msg and "genalpha" in msg
+    assert 0.7 < mbs.systemData.GetTime() < 0.72

@@ -177,3 +177,29 @@ def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100):
         prev = mk
     mbs.Assemble()
     return mbs, settings(t_end, steps)
+
+
+def pendulum():
+    """A rigid bar (EP node, InertiaCuboid) on a revolute joint to ground, swinging under
+    gravity, built with CreateRigidBody/CreateRevoluteJoint."""
+    from exudyn.utilities import InertiaCuboid
+    mbs = _system()
+    ground = mbs.CreateGround()
+    bar = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [1, 0.1, 0.1]), referencePosition=[0.5, 0, 0],
+                              gravity=G2, initialAngularVelocity=[0, 0, 2.0], initialVelocity=[0, 1.0, 0])
+    mbs.CreateRevoluteJoint(bodyNumbers=[ground, bar], position=[0, 0, 0], axis=[0, 0, 1])
+    mbs.Assemble()
+    return mbs, settings(2.0, 100)
+
+
+def pickled_pendulum():
+    """The pendulum copied by pickling, as users copy a system (parameter studies): the copy
+    is appended to a new SystemContainer and assembled again."""
+    import pickle
+    mbs0, s = pendulum()
+    mbs = pickle.loads(pickle.dumps(mbs0))
+    SC = exu.SystemContainer()
+    SC.AppendSystem(mbs)
+    mbs.sys["_SC"] = SC
+    mbs.Assemble()
+    return mbs, s
