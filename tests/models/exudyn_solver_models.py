@@ -203,3 +203,21 @@ def pickled_pendulum():
     mbs.sys["_SC"] = SC
     mbs.Assemble()
     return mbs, s
+
+
+# ---------------------------------------------------------------------------- item 9
+def rigid_chain(n=40, node=exu.NodeType.RotationEulerParameters, t_end=0.5, steps=100, L=0.1, origin=0.0):
+    """A chain of n rigid links (length L, steel bars, InertiaCuboid) on spherical joints, hung from
+    ground at one end, started horizontal and falling under gravity (CreateRigidBody,
+    CreateSphericalJoint, as Exudyn's chain examples build it)."""
+    from exudyn.utilities import InertiaCuboid
+    mbs = _system()
+    ground = mbs.CreateGround()
+    prev = ground
+    for i in range(n):
+        body = mbs.CreateRigidBody(inertia=InertiaCuboid(7800, [L, 0.02, 0.05]),
+                                   nodeType=node, referencePosition=[origin + (i + 0.5) * L, 0, 0], gravity=G2)
+        mbs.CreateSphericalJoint(bodyNumbers=[prev, body], position=[origin + i * L, 0, 0])
+        prev = body
+    mbs.Assemble()
+    return mbs, settings(t_end, steps)
