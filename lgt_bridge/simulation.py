@@ -53,6 +53,15 @@ def _note_initial_projection(rep, t0):
         "initial state consistent to silence this note."), stacklevel=5)
 
 
+def registry_implicit(method):
+    """True when ``method`` is an implicit method of the registry (False for unknown names)."""
+    from .integrators import registry
+    try:
+        return registry.get(method).implicit
+    except Exception:
+        return False
+
+
 class Simulation:
     """A model on a method, set up once (see the module docstring). Options as
     :func:`~lgt_bridge.simulate`; ``t_end``: the end of the run, when known (adaptive
@@ -199,6 +208,8 @@ class Simulation:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:
                 on_step(self.t, st.q, st.V)
+            if st.adaptive and self.t_end is not None and self.n_steps % self.BUDGET_WINDOW == 0:
+                self._check_affordable()
         else:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):
@@ -244,6 +255,48 @@ class Simulation:
                 "explicit method's steps shrink with the distance to it and cannot cross it at this "
                 "tolerance. Use method='genalpha' (index 3, as Exudyn's own solver), or loosen the "
                 "tolerances.")
+
+    #: the run's step budget is checked every BUDGET_WINDOW accepted steps
+    BUDGET_WINDOW = 1000
+
+    def _check_affordable(self):
+        """Stop early, with the figures, a run that cannot finish within max_steps: checked
+        every BUDGET_WINDOW accepted steps, from the mean step of the last window, once it
+        has been steady (within a factor 2 of the window before: no transient that may
+        pass) and the rest of the run at that step needs more than 4x the steps max_steps
+        leaves. An explicit method that Hairer's stiffness test finds at its stability limit
+        (the stepper's ``stiff``) says so, with the step that limit allows."""
+        t_prev, t_last = self._budget_marks if hasattr(self, "_budget_marks") else (None, self._t_start)
+        self._budget_marks = (t_last, self.t)
+        if t_prev is None:
+            return
+        h_now = (self.t - t_last) / self.BUDGET_WINDOW
+        h_before = (t_last - t_prev) / self.BUDGET_WINDOW
+        if not (h_now > 0.0 and 0.5 * h_before <= h_now <= 2.0 * h_before):
+            return
+        need = int(np.ceil((self.t_end - self.t) / h_now))
+        left = self.max_steps - self.n_steps
+        if need <= 4 * left:
+            return
+        stiff = getattr(self.stepper, "stiff", None)
+        head = (f"{self.method} cannot finish this run within max_steps = {self.max_steps}: over the last "
+                f"{2 * self.BUDGET_WINDOW} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
+                f"the run, from t = {self.t:.9g} to {self.t_end:.9g}, would need about {need:d} more steps "
+                f"({left:d} left).")
+        if stiff is not None:
+            _, h_stab, rho = stiff
+            why = (f" Its steps sit at its stability limit, h ≈ {h_stab:.3g} s (the stiffest mode's rate "
+                   f"ρ ≈ {rho:.3g} 1/s), whatever the tolerances: the model is stiff for an explicit method. "
+                   "Use method='radau5' or method='genalpha' (implicit: their steps follow the accuracy, not "
+                   "the stiffest mode).")
+        elif not registry_implicit(self.method):
+            why = (" The error control holds the step there: a fast motion (a stiff spring or contact, a "
+                   "flexible body such as an ANCF cable, sign(v) friction) it must resolve. Use method='radau5' "
+                   "or method='genalpha' when that motion need not be resolved, loosen the tolerances, or raise "
+                   "max_steps.")
+        else:
+            why = " Loosen the tolerances, or raise max_steps."
+        raise StepFailed(head + why)
 
     def _max_steps_message(self):
         """What reaching max_steps means: the mean step so far, the steps the rest of the run

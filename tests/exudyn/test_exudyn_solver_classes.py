@@ -244,3 +244,28 @@ def test_genalpha_newton_failure_message_gives_the_figures():
     msg = str(exc.value)
     assert "did not converge in 1 iterations (last updates h·|ΔẆ| = " in msg
     assert "against the tolerance" in msg and "rounding floor" in msg
+
+
+def test_explicit_method_on_a_stiff_model_stops_early_with_the_stability_limit():
+    """A 1e7 N/m spring chain with strong damping (1e5 N s/m: a real mode at ρ ≈ 3.7e5 1/s)
+    over 100 s through the drop-in: dopri5 would need ~1.1e7 steps at its stability limit,
+    beyond max_steps (1e6). It used to grind to max_steps; now, after 2000 steps (two budget
+    windows of steady steps), it stops with the step the limit allows, the steps the run would
+    need and the advice, keeping the steps computed (the system left at that time)."""
+    from lgt_bridge import StepError
+    mbs, s = sm.stiff_spring_chain(damping=1e5, t_end=100.0, steps=1000)
+    with pytest.raises(StepError) as exc:
+        SolveDynamic(mbs, s, method="dopri5")
+    st = mbs.sys["lgtBridgeStats"]
+    assert not st["success"] and st["n_steps"] == 2000
+    msg = str(exc.value)
+    assert "stability limit, h ≈ " in msg and "stiffest mode's rate" in msg
+    assert "more steps" in msg and "method='radau5' or method='genalpha'" in msg
+    assert 0.0 < mbs.systemData.GetTime() < 0.1
+
+
+def test_the_budget_check_leaves_affordable_runs_alone():
+    """The same chain over 0.05 s fits in max_steps: dopri5 runs it to the end."""
+    mbs, s = sm.stiff_spring_chain(damping=1e5, t_end=0.05, steps=10)
+    SolveDynamic(mbs, s, method="dopri5")
+    assert mbs.sys["lgtBridgeStats"]["success"]

@@ -161,7 +161,7 @@ def load_pulse_exact():
 
 
 # ---------------------------------------------------------------------------- item 10
-def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100):
+def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0):
     """A chain of n mass points (1 kg) on ObjectConnectorSpringDamper springs of stiffness k
     (1e7 N/m: a period of 2 ms), the first hung from ground, under gravity."""
     mbs = _system()
@@ -171,7 +171,7 @@ def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100):
         nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.1 * (i + 1), 0, 0]))
         mbs.AddObject(MassPoint(mass=1.0, nodeNumber=nd))
         mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
-        mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[prev, mk], stiffness=k, damping=10.0,
+        mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[prev, mk], stiffness=k, damping=damping,
                                                   referenceLength=0.1))
         mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -9.81, 0]))
         prev = mk
