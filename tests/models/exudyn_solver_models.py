@@ -221,3 +221,29 @@ def rigid_chain(n=40, node=exu.NodeType.RotationEulerParameters, t_end=0.5, step
         prev = body
     mbs.Assemble()
     return mbs, settings(t_end, steps)
+
+
+def newtons_cradle(n=3, impact_model=2, restitution=0.9, t_end=0.2, steps=200, gap=0.0):
+    """Newton's cradle: n balls (r = 0.05 m, 1 kg mass points, CreateMassPoint) hanging as
+    pendulums (CreateDistanceConstraint to ground, 1 m) in a row along x, touching; the
+    first is released from 0.2 m to the side with 1 m/s towards the others. Neighbours meet
+    by CreateSphereSphereContact with an impact model (impactModel 2: Gonthier / Carvalho-
+    Martins, restitution coefficient) and contact stiffness 1e6 N/m."""
+    mbs = _system()
+    r, length = 0.05, 1.0
+    ground = mbs.CreateGround()
+    balls = []
+    for i in range(n):
+        x = 2 * r * i + (i > 0) * gap
+        start = [x - (0.2 if i == 0 else 0.0), -length, 0]
+        ball = mbs.CreateMassPoint(referencePosition=start, initialVelocity=[1.0 if i == 0 else 0.0, 0, 0],
+                                   physicsMass=1.0, gravity=G2)
+        mbs.CreateDistanceConstraint(bodyNumbers=[ground, ball], localPosition0=[x, 0, 0],
+                                     distance=None)
+        balls.append(ball)
+    for a, b in zip(balls, balls[1:]):
+        mbs.CreateSphereSphereContact(itemNumbers=[a, b], spheresRadii=[r, r], contactStiffness=1e6,
+                                      contactDamping=0.0, impactModel=impact_model,
+                                      restitutionCoefficient=restitution)
+    mbs.Assemble()
+    return mbs, settings(t_end, steps), balls
