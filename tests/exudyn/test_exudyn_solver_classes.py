@@ -306,3 +306,15 @@ def test_impact_models_that_read_the_step_sequence_are_refused(impact_model):
     msg = str(exc.value)
     assert "ObjectContactSphereSphere" in msg and f"impactModel = {impact_model}" in msg
     assert "exu.SolveDynamic" in msg and "impactModel = 0" in msg
+
+
+def test_dopri5_on_a_stiff_ancf_cable_stops_within_two_thousand_steps():
+    """The damped ANCF cable (8 elements, EA = 3.1e4 N) over 20 s: dopri5's steps sit at
+    its stability limit (~1.8e-6 s, ρ ≈ 1.9e6 1/s): 1.1e7 steps. It used to run on for minutes;
+    now it stops after 2000 steps, saying so."""
+    from lgt_bridge import StepError
+    mbs, s, tip = sm.ancf_cable_damped(elements=8)
+    s.timeIntegration.endTime, s.timeIntegration.numberOfSteps = 20.0, 2000
+    with pytest.raises(StepError, match=r"stability limit, h ≈ .*method='radau5' or method='genalpha'"):
+        SolveDynamic(mbs, s, method="dopri5")
+    assert mbs.sys["lgtBridgeStats"]["n_steps"] == 2000
