@@ -278,6 +278,8 @@ class Simulation:
         left = self.max_steps - self.n_steps
         if need <= 4 * left:
             return
+        if self._singular_configuration() is not None:
+            return      # short steps from a singular configuration: the min_step check says so
         stiff = getattr(self.stepper, "stiff", None)
         head = (f"{self.method} cannot finish this run within max_steps = {self.max_steps}: over the last "
                 f"{2 * self.BUDGET_WINDOW} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
