@@ -8,7 +8,7 @@ from .validation import check_inputs
 
 def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
              atol=1e-8, q0=None, V0=None, t_eval=None, progress=None, max_steps=1_000_000,
-             project=True, rho_inf=0.9, newton_tol=1e-10, events=None):
+             project=True, rho_inf=0.9, newton_tol=1e-10, events=None, max_step=None):
     """Integrate ``model`` over ``t_span`` with a Lie group method through τ.
 
     method: "euler", "rkmk2", "rkmk4" (fixed dt), "dopri5", "dop853" (adaptive: rtol/atol,
@@ -31,6 +31,8 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
     evaluations, current step size, rate) once the run has taken more than about 1 s,
     and only when stderr is a terminal and the environment variable ``CI`` is unset;
     True always shows it, False never (:mod:`lgt_bridge.progress`).
+    max_step: the largest step an adaptive method (dopri5, dop853, radau5) may take (None,
+    the default: no cap); a load acting for a short time is then never stepped over.
     max_steps: the most accepted steps the run may take (default 10⁶); reaching it ends
     the run with ``success = False`` and a message saying so, keeping the steps computed.
     events: a function g(t, q, V) -> float or a list of them (scipy's convention: attributes
@@ -44,7 +46,7 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
                                           max_steps)
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=t1, q0=q0, V0=V0, max_steps=max_steps, project=project,
-                     rho_inf=rho_inf, newton_tol=newton_tol, checked=True)
+                     rho_inf=rho_inf, newton_tol=newton_tol, max_step=max_step, checked=True)
     return sim.run(t1, t_eval, progress, events)
 
 

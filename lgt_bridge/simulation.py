@@ -56,10 +56,20 @@ def _note_initial_projection(rep, t0):
         "initial state consistent to silence this note."), stacklevel=5)
 
 
+def registry_implicit(method):
+    """True when ``method`` is an implicit method of the registry (False for unknown names)."""
+    from .integrators import registry
+    try:
+        return registry.get(method).implicit
+    except Exception:
+        return False
+
+
 class Simulation:
     """A model on a method, set up once (see the module docstring). Options as
     :func:`~lgt_bridge.simulate`; ``t_end``: the end of the run, when known (adaptive
-    methods with dense output then step freely up to it); ``fixed_steps``: an adaptive pair
+    methods with dense output then step freely up to it); ``max_step``: the largest step an
+    adaptive method may take (None: no cap); ``fixed_steps``: an adaptive pair
     runs fixed steps of ``dt`` with its own tableau; ``min_step`` (> 0): an error-controlled
     step shrinking below it ends the run, with ``min_step_why`` as the advice.
 
@@ -71,7 +81,10 @@ class Simulation:
 
     def __init__(self, model, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
                  atol=1e-8, t0=0.0, t_end=None, q0=None, V0=None, max_steps=1_000_000, project=True,
-                 rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, checked=False):
+                 rho_inf=0.9, newton_tol=1e-10, fixed_steps=False, min_step=0.0, max_step=None,
+                 checked=False):
+        if max_step is not None and not (float(max_step) > 0.0):
+            raise InputError(f"max_step = {max_step} must be positive (None: no cap).")
         if not checked:
             check_options(method, dt, rtol, atol, max_steps)
             q0, V0 = check_state(model, q0, V0)
@@ -92,6 +105,7 @@ class Simulation:
         self._options = dict(dt=dt, rtol=rtol, atol=atol, project=project, rho_inf=rho_inf,
                              newton_tol=newton_tol, span=span, fixed_steps=fixed_steps)
         self._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, project)
+        self.set_max_step(max_step)
         if min_step > 0:
             stepper.min_step = min_step
         self.min_step = min_step if stepper.adaptive else 0.0
@@ -107,10 +121,20 @@ class Simulation:
         sim._setup(model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent)
         return sim
 
+    def set_max_step(self, max_step):
+        """The largest step an adaptive method may take (None: no cap). The step controller
+        never proposes more; output times still come from dense output."""
+        self.max_step = float(max_step) if (max_step is not None and self.stepper.adaptive) else np.inf
+        self.h = min(self.h, self.max_step)
+        self.first_step = self.h
+
     def _setup(self, model, stepper, dt, t0, q0, V0, max_steps, t_end, consistent):
         self.model, self.stepper = model, stepper
+        self.max_step = np.inf
         self._post = getattr(model, "post_step", None)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
+        self._t_start = float(t0)
+        self._q_start = np.array(q0, float)
         self.t_end = t_end
         self.dense = stepper.dense_capable and t_end is not None
         self.n_steps = 0
@@ -193,7 +217,7 @@ class Simulation:
     def _step(self, target, on_step):
         st = self.stepper
         if self.n_steps >= self.max_steps:
-            raise StepFailed(f"max_steps = {self.max_steps} reached at t = {self.t:.9g}")
+            raise StepFailed(self._max_steps_message())
         h_before = self.h
         h_try = min(self.h, target - self.t)
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
@@ -212,11 +236,13 @@ class Simulation:
             self.t = target if hit else self.t + h_try
             self.model.write_back(st.q, st.V, self.t)
             if st.adaptive:
-                self.h = max(h_new, self.h) if hit and h_new < self.h else h_new
+                self.h = min(max(h_new, self.h) if hit and h_new < self.h else h_new, self.max_step)
             else:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:
                 on_step(self.t, st.q, st.V)
+            if st.adaptive and self.t_end is not None and self.n_steps % self.BUDGET_WINDOW == 0:
+                self._check_affordable()
         else:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):
@@ -224,7 +250,111 @@ class Simulation:
         if (self.h < self.min_step and self.h < h_before
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
             raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
-                             f"{self.min_step_name} = {self.min_step:g}: " + self.min_step_why)
+                             f"{self.min_step_name} = {self.min_step:g}: "
+                             + (self._singular_configuration() or self.min_step_why))
+
+    #: a singular value of the constraint Jacobian below this fraction of the largest (and
+    #: not already at the start) marks a singular configuration
+    SINGULAR_RATIO = 1e-3
+
+    def _singular_configuration(self):
+        """Why an explicit method's steps collapsed, when the cause is a singular configuration
+        of a mechanism (its constraint Jacobian A loses rank: bars in line, a linkage at a dead
+        point): the index-1 accelerations there respond to the smallest error of a stage's
+        state as 1/σ², so the explicit steps shrink with the distance to it and cannot cross.
+        None when A keeps its rank (and for unconstrained models and index-3 methods)."""
+        m, st = self.model, self.stepper
+        if not m.n_constraints or st.projector is None:
+            return None
+        try:
+            U, sv, _ = np.linalg.svd(np.asarray(m.constraint_jacobian(st.q), float))
+            sv0 = np.linalg.svd(np.asarray(m.constraint_jacobian(self._q_start), float), compute_uv=False)
+        except Exception:
+            return None
+        top, top0 = float(sv.max(initial=0.0)), float(sv0.max(initial=0.0))
+        if top == 0.0:
+            return None
+        small = np.flatnonzero(sv < self.SINGULAR_RATIO * top)
+        n0 = int((sv0 < self.SINGULAR_RATIO * top0).sum())     # redundant from the start
+        if len(small) <= n0:
+            return None
+        k = int(small[0])
+        rows = [int(i) for i in np.argsort(-np.abs(U[:, k]))[:4] if abs(U[i, k]) > 0.2]
+        own = getattr(m, "constraint_owners", None)
+        who = own(rows) if own is not None else f"constraint rows {rows}"
+        return (f"the mechanism is at a singular configuration there (the constraint Jacobian's smallest "
+                f"singular value is {sv[k]:.2g}, {sv[k] / top:.1g} of its largest; mostly {who}). Its "
+                "index-1 accelerations respond to the smallest error of a stage's state as 1/σ², so an "
+                "explicit method's steps shrink with the distance to it and cannot cross it at this "
+                "tolerance. Use method='genalpha' (index 3, as Exudyn's own solver), or loosen the "
+                "tolerances.")
+
+    #: the run's step budget is checked every BUDGET_WINDOW accepted steps
+    BUDGET_WINDOW = 1000
+
+    def _check_affordable(self):
+        """Stop early, with the figures, a run that cannot finish within max_steps: checked
+        every BUDGET_WINDOW accepted steps, from the mean step of the last window, once it
+        has been steady (within a factor 2 of the window before: no transient that may
+        pass) and the rest of the run at that step needs more than 4x the steps max_steps
+        leaves. An explicit method that Hairer's stiffness test finds at its stability limit
+        (the stepper's ``stiff``) says so, with the step that limit allows."""
+        t_prev, t_last = self._budget_marks if hasattr(self, "_budget_marks") else (None, self._t_start)
+        self._budget_marks = (t_last, self.t)
+        if t_prev is None:
+            return
+        h_now = (self.t - t_last) / self.BUDGET_WINDOW
+        h_before = (t_last - t_prev) / self.BUDGET_WINDOW
+        if not (h_now > 0.0 and 0.5 * h_before <= h_now <= 2.0 * h_before):
+            return
+        need = int(np.ceil((self.t_end - self.t) / h_now))
+        left = self.max_steps - self.n_steps
+        if need <= 4 * left:
+            return
+        if self._singular_configuration() is not None:
+            return      # short steps from a singular configuration: the min_step check says so
+        stiff = getattr(self.stepper, "stiff", None)
+        head = (f"{self.method} cannot finish this run within max_steps = {self.max_steps}: over the last "
+                f"{2 * self.BUDGET_WINDOW} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
+                f"the run, from t = {self.t:.9g} to {self.t_end:.9g}, would need about {need:d} more steps "
+                f"({left:d} left).")
+        if stiff is not None:
+            _, h_stab, rho = stiff
+            why = (f" Its steps sit at its stability limit, h ≈ {h_stab:.3g} s (the stiffest mode's rate "
+                   f"ρ ≈ {rho:.3g} 1/s), whatever the tolerances: the model is stiff for an explicit method. "
+                   "Use method='radau5' or method='genalpha' (implicit: their steps follow the accuracy, not "
+                   "the stiffest mode).")
+        elif not registry_implicit(self.method):
+            why = (" The error control holds the step there: a fast motion (a stiff spring or contact, a "
+                   "flexible body such as an ANCF cable, sign(v) friction) it must resolve. Use method='radau5' "
+                   "or method='genalpha' when that motion need not be resolved, loosen the tolerances, or raise "
+                   "max_steps.")
+        else:
+            why = " Loosen the tolerances, or raise max_steps."
+        raise StepFailed(head + why)
+
+    def _max_steps_message(self):
+        """What reaching max_steps means: the mean step so far, the steps the rest of the run
+        would need at it, and for an explicit method the likely cause (a stiff model keeps an
+        explicit method's steps at its stability limit) and what to use instead."""
+        from .integrators import registry
+        msg = f"max_steps = {self.max_steps} reached at t = {self.t:.9g}."
+        t_end = self.t_end
+        if self.n_steps and t_end is not None and self.t > self._t_start:
+            h_mean = (self.t - self._t_start) / self.n_steps
+            msg += (f" The mean step so far is {h_mean:.3g} s; the rest of the run to t = {t_end:.9g} would "
+                    f"need about {int(np.ceil((t_end - self.t) / h_mean)):d} more steps.")
+        try:
+            spec = registry.get(self.method)
+        except Exception:
+            spec = None
+        if spec is not None and not spec.implicit:
+            msg += (" If the model is stiff (a stiff spring or contact, a flexible body such as an ANCF "
+                    "cable, sign(v) friction), an explicit method's steps sit at its stability limit "
+                    "whatever the tolerances: use method='radau5' or method='genalpha'.")
+        else:
+            msg += " Raise max_steps, or loosen the tolerances (or lengthen dt)."
+        return msg
 
     def _attempt_discontinuous(self, h, post):
         """A step of a model with discontinuous states (contact, friction: the model's

@@ -75,6 +75,31 @@ def components(Mb):
     return order.astype(np.int64), np.unique(lab, return_counts=True)[1].astype(np.int64)
 
 
+def _block_inverses(Mb, members, sizes):
+    """{size: (component indices, blocks, inverses)} of the diagonal blocks of M̄, components
+    of one size inverted in one call through their Cholesky factors; None when a block is not
+    positive definite (singular or indefinite: it then has no inverse of its own)."""
+    start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    out = {}
+    for size in np.unique(sizes):
+        cs = np.flatnonzero(sizes == size)
+        idx = members[start[cs][:, None] + np.arange(size)]                 # (k, size)
+        blks = Mb[idx[:, :, None], idx[:, None, :]]                          # (k, size, size)
+        d = np.sqrt(np.abs(np.diagonal(blks, axis1=1, axis2=2)).max(axis=1))
+        try:
+            L = np.linalg.cholesky(blks)
+        except np.linalg.LinAlgError:
+            return None
+        # a factor with a pivot at rounding level is singular in all but name
+        piv = np.diagonal(L, axis1=1, axis2=2).min(axis=1)
+        if not (piv > 1e-7 * d).all():
+            return None
+        Li = np.linalg.inv(L)
+        inv = np.swapaxes(Li, 1, 2) @ Li
+        out[int(size)] = (cs, blks, 0.5 * (inv + np.swapaxes(inv, 1, 2)))
+    return out
+
+
 def _rows(rows):
     """An int64 section of T from rows of one length (-1 in the columns they do not use)."""
     t = np.full((len(rows), NCOL), -1, np.int64)
@@ -108,6 +133,13 @@ def pack(model, nc_max=None, views=True):
             blocks.append(row)
     Mb = model.Mbar
     members, sizes = components(Mb) if Mb is not None else (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    inverses = _block_inverses(Mb, members, sizes) if Mb is not None else None
+    if Mb is not None and inverses is None:
+        # a diagonal block of M̄ is not positive definite (massless coordinates, e.g. an
+        # ANCF beam section without torsional inertia): no packed inverse; the kernels then
+        # factorize the whole M̄ (dense Cholesky, flag 2 when it is not positive definite)
+        Mb = None
+        members, sizes = np.zeros(0, np.int64), np.zeros(0, np.int64)
     nc = int(model.n_constraints if nc_max is None else nc_max)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     foff = np.concatenate([[0], np.cumsum(sizes ** 2)]).astype(np.int64)
@@ -127,12 +159,7 @@ def pack(model, nc_max=None, views=True):
     off[OREF:OEND + 1] = np.concatenate([[0], np.cumsum(wsizes)])
     w = np.zeros(int(off[OEND]))
     w[off[OREF]:off[OREF] + n2] = np.asarray(model.ref, float)
-    for size in np.unique(sizes):         # components of one size are inverted in one call
-        cs = np.flatnonzero(sizes == size)
-        idx = members[start[cs][:, None] + np.arange(size)]                 # (k, size)
-        blks = Mb[idx[:, :, None], idx[:, None, :]]                          # (k, size, size)
-        inv = np.linalg.inv(blks)
-        inv = 0.5 * (inv + np.swapaxes(inv, 1, 2))
+    for size, (cs, blks, inv) in (inverses or {}).items():
         at = (foff[cs][:, None] + np.arange(size * size)[None, :]).reshape(-1)
         w[off[OMB] + at] = blks.reshape(-1)
         w[off[OMBI] + at] = inv.reshape(-1)

@@ -29,7 +29,7 @@ class NodeLayout:
     def __init__(self, mbs):
         sd = mbs.systemData
         self.n2 = sd.ODE2Size()
-        bodies, vq, ep_ae, kinds = [], [], [], []
+        bodies, vq, ep_ae, kinds, vnode = [], [], [], [], []
         iv = 0
         vidx_of_q = np.full(self.n2, -1)
         for i in range(sd.NumberOfNodes()):
@@ -49,7 +49,8 @@ class NodeLayout:
             elif typ == "PointGround" or not len(idx):
                 continue                                       # no ODE2 coordinates
             elif typ in VECTOR:
-                for k in idx:
+                for j, k in enumerate(idx):
+                    vnode.append((i, typ, j))
                     vq.append(k)
                     vidx_of_q[k] = iv
                     iv += 1
@@ -59,6 +60,8 @@ class NodeLayout:
                                  f"vector-space nodes: {list(VECTOR)}. Run this model with Exudyn's own "
                                  "exu.SolveDynamic, or build it from supported nodes.")
         self.kinds, self.ep_ae, self.nv = kinds, ep_ae, iv
+        #: (node number, node type, coordinate of the node) of each vector-space velocity
+        self.vector_nodes = vnode
         self.layout = Layout(self.n2, iv, bodies, tuple(vq), tuple(vidx_of_q[vq]))
         # per node type: q rows of position/rotation and V columns of ω/ṙ, batched
         self.pos_q = np.array([k[1][:3] for k in kinds], int).reshape(-1, 3)
@@ -82,6 +85,31 @@ class NodeLayout:
             b.param.validate(q0[[*b.pos, *b.rot]], f"initial coordinates of Exudyn node '{b.name}'")
 
     # ------------------------------------------------------------------ velocity maps
+    def owner(self, mbs, iv):
+        """The Exudyn item behind velocity ``iv``, for messages: 'coordinate 3 of node 5
+        (NodePointSlope23) of ObjectANCFBeam 2, 3' or the rigid body's name."""
+        vv = list(self.vv)
+        if iv not in vv:
+            return self.layout.owner("V", iv)
+        node, typ, j = self.vector_nodes[vv.index(iv)]
+        objs = []
+        for o in range(mbs.systemData.NumberOfObjects()):
+            od = mbs.GetObject(o)
+            nn = od.get("nodeNumbers", od.get("nodeNumber"))
+            try:
+                nn = [int(k) for k in nn]
+            except TypeError:                       # one NodeIndex, or None
+                nn = [] if nn is None else [int(nn)]
+            if node in nn:
+                typ_o = str(od.get("objectType", ""))
+                objs.append((typ_o if typ_o.startswith("Object") else "Object" + typ_o, o))
+        where = ""
+        if objs:
+            kinds = dict.fromkeys(k for k, _ in objs)
+            where = " of " + "; ".join(f"{k} " + ", ".join(str(o) for kk, o in objs if kk == k)
+                                     for k in kinds)
+        return f"coordinate {j} of node {node} (Node{typ}){where}"
+
     @staticmethod
     def rot_blocks(typ, rot):
         """d(rotation coordinates)/dt = B ω per node: (k, nrot, 3)."""

@@ -20,10 +20,11 @@ from . import constraints as _constraints
 from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error
 from .layout import NodeLayout
+from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
 from .ode1 import ODE1States
 
 
-class ExudynModel(Model):
+class ExudynModel(StepHooks, Model):
     """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate.simulate`.
 
     backend: 'numba' (compiled conversions, :mod:`.kernels`) or 'numpy' (the reference
@@ -71,12 +72,14 @@ class ExudynModel(Model):
         self.cons = ConstraintRows(engine, nodes, self.q0, self.V0, self.t0, self.index2)
         self._take_rows()
         # connectors a pre-step user function may switch (read once here, then each step)
-        self._connectors = self._connector_state() if _has_prestep(mbs) else None
+        self._connectors = self._connector_state() if has_prestep(mbs) else None
         if sd.DataSize():
             # contact/friction states: Exudyn's own discontinuous iteration after each step
             self.post_step = self._post_newton
             s = simulationSettings if simulationSettings is not None else engine.exu.SimulationSettings()
             self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
+            self._gap_rows = gap_rows(mbs)
+            refuse_impact_models(mbs)
         self.Mbar = constant_twist_mass(engine, nodes, self.q0)
         self.ode1 = None
         if sd.ODE1Size():
@@ -93,117 +96,6 @@ class ExudynModel(Model):
         cons = self.cons
         self.n_constraints, self.velocity_rows = cons.n, cons.velocity_rows
         self.time_dependent_constraints, self.redundant_rows = cons.time_dependent, cons.redundant_rows
-
-    def _connector_state(self):
-        """What decides which AE rows are constraints and can be changed between steps:
-        ``activeConnector`` and ``constrainedAxes`` of every object owning AE rows."""
-        mbs, sd, out = self.mbs, self.sd, []
-        if not self.engine.nae:
-            return out
-        if getattr(self, "_ae_objects", None) is None:
-            self._ae_objects = []
-            for k in range(sd.NumberOfObjects()):
-                try:
-                    if len(sd.GetObjectLTGAE(k)):
-                        o = mbs.GetObject(k)
-                        self._ae_objects.append((k, [p for p in ("activeConnector", "constrainedAxes") if p in o]))
-                except Exception:                   # objects without algebraic equations
-                    pass
-        for k, params in self._ae_objects:
-            out.append(tuple(np.ravel(mbs.GetObjectParameter(k, p)).tolist() for p in params))
-        return out
-
-    @engine_call
-    def rows_changed(self, q, V, t):
-        """Re-classify the constraint rows at (q, V, t) when a connector was switched on or
-        off (or its ``constrainedAxes`` changed) since the last classification — a pre-step
-        user function did it; True when the rows changed (steppers built on the old rows
-        must be rebuilt)."""
-        state = self._connector_state()
-        if self._connectors is None or state == self._connectors:
-            self._connectors = state
-            return False
-        self._connectors = state
-        q2, V2 = q[:self.n2], V[:self.nv]
-        old = (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows)
-        self.cons = ConstraintRows(self.engine, self.nodes, q2, V2, t, self.index2)
-        self._take_rows()
-        self.write_back(q, V, t)
-        if old == (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows):
-            return False
-        self.reset_caches()
-        return True
-
-    @engine_call
-    def begin_step(self, q, t, h, g_end):
-        """At the start of an Exudyn step after its pre-step user function ran: a change of
-        the holonomic rows' residual at the unchanged state (an offset moved: a crane's
-        reeving, a ramped drive) against ``g_end`` (:meth:`holonomic_residual` where the last
-        step ended) is spread over the step as a time dependence (see
-        :meth:`.constraints.ConstraintRows.set_ramp`), so explicit steps follow it in
-        position and velocity instead of projecting a jump. Not with index 2 (Exudyn's
-        velocity-level rows do not see offsets). Velocity-level offsets are looked at again.
-        True when the step's velocity targets may have moved (a ramp, velocity offsets): the
-        step should start with its velocities on them."""
-        cons = self.cons
-        cons.set_ramp(0, 1, None)
-        if cons.nonholonomic:               # a velocity-level offset may have been set
-            cons.detect_velocity_offset(q[:self.n2], t)
-        if g_end is not None and not self.index2 and self.n_constraints and len(g_end) == cons.n:
-            jump = self.holonomic_residual(q, t) - g_end
-            if np.abs(jump).max() > 1e-14 * (1.0 + np.abs(g_end).max()):
-                cons.set_ramp(t, h, jump)
-        return cons.ramp is not None or cons.velocity_offset
-
-    @engine_call
-    def holonomic_residual(self, q, t):
-        """g(q, t) of the holonomic rows (0 on the others), without any ramp."""
-        if not self.n_constraints:
-            return np.zeros(0)
-        ramp, self.cons.ramp = self.cons.ramp, None
-        try:
-            return self.cons.at(q[:self.n2], t)
-        finally:
-            self.cons.ramp = ramp
-
-    @engine_call
-    def multipliers(self, q, V, t, Vd=None):
-        """λ of the kept rows at (q, V, t): the index-1 solve's Lagrange multipliers, in
-        Exudyn's convention (M q̈ + C_qᵀ λ = Q; A = C_q H, so the twist solve's λ is
-        Exudyn's), from Aᵀ λ = Q̄ - M̄ V̇ with V̇ = f(q, V, t) (given as ``Vd``, or evaluated)."""
-        if Vd is None:
-            Vd = self.f(q, V, t)
-        if not self.n_constraints:
-            return np.zeros(0)
-        q2, V2 = np.asarray(q[:self.n2], float), np.asarray(V[:self.nv], float)
-        if self._compiled:
-            Qb, Mb = self._forces_compiled(q2, V2, t)
-        else:
-            Mb, Qb = self._evaluate(q2, V2, t, need_gamma=False)[:2]
-        A = self._jacobian2(q2)
-        return np.linalg.lstsq(A.T, Qb - Mb @ Vd[:self.nv], rcond=None)[0]
-
-    @engine_call
-    def write_outputs(self, q, V, t, accelerations=True, multipliers=True):
-        """After an output step: the state, and what Exudyn's sensors and solution file read
-        besides it — the accelerations q̈_e (``accelerations``) and, in Exudyn's algebraic
-        coordinates, the Lagrange multipliers of that state (``multipliers``; joint forces:
-        ``ForceLocal`` sensors read them); rows set aside (inactive, redundant) and the
-        Euler-parameter normalizations (τ keeps quaternions unit: no reaction) get 0."""
-        nae = self.engine.nae if multipliers else 0
-        if not accelerations and not nae:
-            self.write_back(q, V, t)
-            return
-        Vd = self.f(q, V, t)
-        q2, V2 = q[:self.n2], V[:self.nv]
-        lam = self.multipliers(q, V, t, Vd) if nae else None
-        self.write_back(q, V, t)
-        if accelerations:
-            self.sd.SetODE2Coordinates_tt(self.nodes.H(q2) @ Vd[:self.nv] + self.nodes.Hdot_V(q2, V2))
-        if nae:
-            ae = np.zeros(nae)
-            ae[self.cons.ae_keep] = lam
-            self.sd.SetAECoordinates(ae)
 
     # ------------------------------------------------------------------ the parts' handles and maps
     @property
@@ -254,7 +146,16 @@ class ExudynModel(Model):
         friction states updated from the state (q, V, t)); True when they changed by more
         than timeIntegration.discontinuous.iterationTolerance."""
         self.write_back(q, V, t)
-        return float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol
+        gaps = self._gap_rows
+        d0 = np.array(self.sd.GetDataCoordinates())[gaps] if len(gaps) else None
+        if float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol:
+            return True
+        if d0 is None:
+            return False
+        # a contact gap that changes sign (the contact closing or opening) is a switch however
+        # small the change: otherwise the step that crosses it keeps the old contact state
+        d1 = np.array(self.sd.GetDataCoordinates())[gaps]
+        return bool(np.any(d0 * d1 < 0.0))
 
     def discontinuous_state(self):
         return np.array(self.sd.GetDataCoordinates())
@@ -412,6 +313,10 @@ class ExudynModel(Model):
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
+    def constraint_owners(self, rows):
+        """The Exudyn objects owning the model's constraint ``rows`` (for messages)."""
+        return self.engine.ae_owners([int(self.cons.ae_keep[i]) for i in rows])
+
     def constraints(self, q):
         return self.constraints_at(q, self.sd.GetTime())
 
@@ -489,7 +394,11 @@ class ExudynModel(Model):
         A = self._jacobian2(q2) if self.n_constraints else None
         d = mass_defects(M, A)
         if d:
-            raise InputError(mass_message(d, [self.nodes.layout.owner("V", i) for i, _ in d]))
+            raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
+                             + " Exudyn's implicit solvers (generalized-α) can run such a model, since "
+                             "their iteration matrix includes the stiffness; run it with Exudyn's own "
+                             "exu.SolveDynamic, or give these coordinates mass (an ANCF beam's "
+                             "sectionData.inertia: no zero entry).")
 
     # ------------------------------------------------------------------ compiled backend
     def reset_caches(self):
@@ -522,14 +431,6 @@ class ExudynModel(Model):
                         raise err from exc
                 self.f = f
         return self._P
-
-
-def _has_prestep(mbs):
-    """True when the system has a pre-step user function (Exudyn returns 0 when unset)."""
-    try:
-        return bool(mbs.GetPreStepUserFunction())
-    except Exception:
-        return False
 
 
 def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):

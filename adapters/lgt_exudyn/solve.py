@@ -34,7 +34,7 @@ def _note_once(key, text):
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
                  method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
-                 project=True, verbose=None, accelerations=None, progress=None):
+                 project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn"):
     """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
     ignored), integrated by the bridge with ``method``/``group``/``chart``.
 
@@ -44,8 +44,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
       h = (endTime − startTime)/numberOfSteps. Fixed-step methods (euler, rkmk2, rkmk4,
       genalpha) step with h.
     - ``automaticStepSize``: True (Exudyn's default): dopri5/dop853 control their step by
-      ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``,
-      are not capped at h, and give Exudyn's output steps by dense output. False: dopri5/
+      ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``
+      and, as Exudyn's own solvers, never step further than h (Exudyn's documented maximum
+      step; a load pulse shorter than the run is then not stepped over); output times
+      between steps come from dense output and never shorten steps. ``max_step``: "exudyn"
+      (default) that cap; a number: another cap; None: no cap (smooth models, where the
+      error control alone may take steps longer than h). False: dopri5/
       dop853 take fixed steps of h with their own tableau (as Exudyn's DOPRI5 does), unless
       ``rtol``/``atol`` are passed here, which always select error control. radau5 (implicit,
       for stiff models) always controls its step by the tolerances.
@@ -109,6 +113,14 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     rtol = float(rtol if rtol is not None else ti.relativeTolerance if from_settings else 1e-6)
     atol = float(atol if atol is not None else ti.absoluteTolerance if from_settings else 1e-8)
     h_min = float(ti.minimumStepSize) if controlled else 0.0
+    if isinstance(max_step, str):
+        if max_step != "exudyn":
+            raise InputError(f"max_step = {max_step!r}: use 'exudyn' (endTime/numberOfSteps, as Exudyn), "
+                             "a positive number, or None (no cap).")
+        max_step = h_out
+    if max_step is not None and not float(max_step) > 0.0:
+        raise InputError(f"max_step = {max_step} must be positive, 'exudyn' or None.")
+    h_cap = float(max_step) if (controlled and max_step is not None) else None
     h_init = float(ti.initialStepSize) if controlled and ti.initialStepSize > 0 else None
     if controlled:
         dt = h_init
@@ -128,8 +140,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # minimumStepSize: the floor of an error-controlled step and of genalpha's step halving
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if prestep else t1, project=project, rho_inf=rho_inf,
-                     fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), checked=True)
-    group, chart = sim.group, sim.chart
+                     fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
+                     checked=True)
+    group, chart, stepper = sim.group, sim.chart, sim.stepper
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -213,7 +226,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               wall_s=time.perf_counter() - wall0, exudyn_steps=n, success=not failure,
               message=failure[0] if failure else "reached endTime")
     if controlled:
-        st.update(first_step=first_step, minimum_step=h_min)
+        st.update(first_step=first_step, minimum_step=h_min, maximum_step=h_cap)
     if sim.initial_projection is not None:
         st["initial_projection"] = sim.initial_projection
     if model.redundant_rows:

@@ -104,6 +104,7 @@ class GenAlpha(Stepper):
         self.n_jacobians = 0
         self.min_step = 1e-8          # Exudyn's default timeIntegration.minimumStepSize
         self.cut_steps = 0
+        self.n_floor = 0              # Newton solves ended at the rounding floor
 
     def snapshot(self):
         return (self.q.copy(), self.V.copy(), self.Wd, getattr(self, "a", None),
@@ -311,6 +312,27 @@ class GenAlpha(Stepper):
         self.cut_steps = max(0, self.cut_steps - 1)
         return True, (2.0 * h if grown else None)
 
+    #: the rounding floor of the Newton updates, in units of its estimate (below)
+    FLOOR = 100.0
+
+    def _newton_tolerances(self, h, n):
+        """(tol, floor) of the Newton updates' RMS size h·|ΔẆ|/√n (a velocity).
+
+        tol = newton_tol·(1 + |W|_RMS): relative to the size of the velocities, per
+        unknown (the Euclidean norm over a 40-body chain's 240 unknowns was 15x a 1-body
+        model's: the same accuracy failed on the larger model).
+        floor: the level the residual's rounding sets. The position rows g/(h²β) carry
+        rounding eps·|q|, which moves Ẇ by eps·|q|/(h²β) and h·Ẇ by eps·|q|/(hβ); the
+        force rows move it by eps·(1 + |W|). It grows as h falls, so halving the step cannot
+        get below it: an update that stops falling below FLOOR times this is converged."""
+        W = self.W
+        w_rms = math.sqrt(W.dot(W) / max(n, 1))
+        tol = self.tol * (1.0 + w_rms)
+        eps = np.finfo(float).eps
+        qmax = float(np.abs(self.q).max(initial=0.0))
+        floor = self.FLOOR * eps * ((1.0 + w_rms) + (qmax / (h * self.beta) if self.nc else 0.0))
+        return tol, max(tol, floor)
+
     def _attempt(self, t, h):
         """Modified Newton: the stored iteration matrix is refreshed at the current
         iterate whenever the contraction factor ‖Δz_k‖/‖Δz_{k-1}‖ exceeds THETA
@@ -329,7 +351,8 @@ class GenAlpha(Stepper):
         if self._solve is None or not _same(self._lu_h, h):
             self._jacobian(Wd1, lam, t1, h)
         prev, converged, finite = None, False, True
-        tol = self.tol * (1.0 + math.sqrt(self.W.dot(self.W)))
+        tol, floor = self._newton_tolerances(h, n)
+        sizes = []
         for it in range(self.nmax):
             r = self._residual(Wd1, lam, t1, h)
             if not self._finite:
@@ -343,9 +366,15 @@ class GenAlpha(Stepper):
             self.n_newton += 1
             # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
             # of size eps/(h²β) from the scaled constraint rows
-            size = h * math.sqrt(dW.dot(dW))
+            size = h * math.sqrt(dW.dot(dW) / n)
+            sizes.append(size)
             if size <= tol:
                 converged = True
+                break
+            # at the rounding floor of the residual the updates stop falling: that is converged
+            if size <= floor and len(sizes) > 1 and size >= 0.5 * sizes[-2]:
+                converged = True
+                self.n_floor += 1
                 break
             if prev is not None and size > self.THETA * prev:
                 self._jacobian(Wd1, lam, t1, h)
@@ -354,7 +383,12 @@ class GenAlpha(Stepper):
                 prev = size
         if not converged:
             self._solve = None
-            why = "diverged (non-finite residual)" if not finite else f"did not converge in {self.nmax} iterations"
+            if not finite:
+                why = "diverged (non-finite residual)"
+            else:
+                last = ", ".join(f"{x:.2g}" for x in sizes[-3:])
+                why = (f"did not converge in {self.nmax} iterations (last updates h·|ΔẆ| = {last} m/s or "
+                       f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
             raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
                              diverged=False)
         q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))

@@ -137,6 +137,57 @@ class AdaptiveRK(ExplicitRK):
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
         self._errsums = problem.error_sums
+        # stiffness detection (Hairer's DOPRI5/DOP853 test): the last two stages, both at
+        # c = 1, give the stiffest rate seen by the step
+        ns = tableau.stages
+        c = np.asarray(tableau.c, float)
+        self._stiff_pair = (ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None
+        if self._stiff_pair is not None:
+            i, j = self._stiff_pair
+            self._stiff_a = np.ascontiguousarray(np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j])
+        self.stability_bound = self.STABILITY_BOUND.get(ns, 3.25)
+        self._n_stiff = self._n_nonstiff = 0
+        self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
+
+    #: h·ρ at the edge of the stability region on the negative real axis, by number of
+    #: stages (Hairer's values: DOPRI5 3.25, DOP853 6.1)
+    STABILITY_BOUND = {7: 3.25, 13: 6.1}
+    #: accepted steps in a row at the stability limit before the model is called stiff (Hairer: 15)
+    STIFF_STEPS = 15
+
+    def stiffness_rate(self, h):
+        """ρ ≈ |f(y_j) − f(y_i)| / |y_j − y_i| from the step's last two stages (both at
+        t + h): the rate of the stiffest mode the step sees; None when not measurable."""
+        if self._stiff_pair is None:
+            return None
+        i, j = self._stiff_pair
+        KX, KW, a = self.KX, self.KW, self._stiff_a
+        dX, dW = KX[j] - KX[i], KW[j] - KW[i]
+        yX, yW = h * (a @ KX[:j]), h * (a @ KW[:j])
+        den = float(yX.dot(yX) + yW.dot(yW))
+        num = float(dX.dot(dX) + dW.dot(dW))
+        if not den > 0.0 or not math.isfinite(num):
+            return None
+        return math.sqrt(num / den)
+
+    def _detect_stiffness(self, t, h):
+        """Hairer's test on each accepted step: h·ρ above the stability bound in STIFF_STEPS
+        accepted steps (six below it in a row reset the count) means the error control is
+        held at the stability limit by a mode it does not need to resolve: ``stiff`` is then
+        (t, h_stable = bound/ρ, ρ), for the driver to judge whether the run can afford it."""
+        rho = self.stiffness_rate(h)
+        if rho is None:
+            return
+        if h * rho > self.stability_bound:
+            self._n_stiff += 1
+            self._n_nonstiff = 0
+            if self._n_stiff >= self.STIFF_STEPS:
+                self.stiff = (t + h, self.stability_bound / rho, rho)
+        else:
+            self._n_nonstiff += 1
+            if self._n_nonstiff >= 6:
+                self._n_stiff = 0
+                self.stiff = None
 
     def initial_step(self, t):
         """The starting step (:func:`.control.initial_step`)."""
@@ -178,6 +229,7 @@ class AdaptiveRK(ExplicitRK):
             self.n_rejected += 1
             return False, 0.25 * h
         if en <= 1.0:
+            self._detect_stiffness(t, h)
             fac = self.control.accepted(en)
             if self.dense_capable:
                 self.dense = DenseStep(self, t, h, X1, W1)

@@ -1,0 +1,176 @@
+"""What the Exudyn drop-in asks of a model between Exudyn's steps: connectors switched on or
+off by a pre-step user function (the constraint rows classified again), a constraint offset
+moved (spread over the step as a time dependence), and the outputs of a written state (its
+accelerations and Lagrange multipliers for Exudyn's sensors and solution file); and the
+system facts they depend on: a pre-step user function, the contact gaps among the data
+coordinates, impact models the bridge refuses. :class:`StepHooks` is a part of
+:class:`~lgt_exudyn.model.ExudynModel`."""
+import numpy as np
+
+from lgt_bridge.errors import InputError
+
+from .constraints import ConstraintRows
+from .engine import engine_call
+
+
+class StepHooks:
+    """The drop-in's per-step methods of :class:`~lgt_exudyn.model.ExudynModel` (they use its
+    parts: ``engine``, ``nodes``, ``cons``, ``sd``, ``mbs``)."""
+
+    def _connector_state(self):
+        """What decides which AE rows are constraints and can be changed between steps:
+        ``activeConnector`` and ``constrainedAxes`` of every object owning AE rows."""
+        mbs, sd, out = self.mbs, self.sd, []
+        if not self.engine.nae:
+            return out
+        if getattr(self, "_ae_objects", None) is None:
+            self._ae_objects = []
+            for k in range(sd.NumberOfObjects()):
+                try:
+                    if len(sd.GetObjectLTGAE(k)):
+                        o = mbs.GetObject(k)
+                        self._ae_objects.append((k, [p for p in ("activeConnector", "constrainedAxes") if p in o]))
+                except Exception:                   # objects without algebraic equations
+                    pass
+        for k, params in self._ae_objects:
+            out.append(tuple(np.ravel(mbs.GetObjectParameter(k, p)).tolist() for p in params))
+        return out
+
+    @engine_call
+    def rows_changed(self, q, V, t):
+        """Re-classify the constraint rows at (q, V, t) when a connector was switched on or
+        off (or its ``constrainedAxes`` changed) since the last classification — a pre-step
+        user function did it; True when the rows changed (steppers built on the old rows
+        must be rebuilt)."""
+        state = self._connector_state()
+        if self._connectors is None or state == self._connectors:
+            self._connectors = state
+            return False
+        self._connectors = state
+        q2, V2 = q[:self.n2], V[:self.nv]
+        old = (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows)
+        self.cons = ConstraintRows(self.engine, self.nodes, q2, V2, t, self.index2)
+        self._take_rows()
+        self.write_back(q, V, t)
+        if old == (self.n_constraints, tuple(self.cons.ae_keep), self.velocity_rows):
+            return False
+        self.reset_caches()
+        return True
+
+    @engine_call
+    def begin_step(self, q, t, h, g_end):
+        """At the start of an Exudyn step after its pre-step user function ran: a change of
+        the holonomic rows' residual at the unchanged state (an offset moved: a crane's
+        reeving, a ramped drive) against ``g_end`` (:meth:`holonomic_residual` where the last
+        step ended) is spread over the step as a time dependence (see
+        :meth:`.constraints.ConstraintRows.set_ramp`), so explicit steps follow it in
+        position and velocity instead of projecting a jump. Not with index 2 (Exudyn's
+        velocity-level rows do not see offsets). Velocity-level offsets are looked at again.
+        True when the step's velocity targets may have moved (a ramp, velocity offsets): the
+        step should start with its velocities on them."""
+        cons = self.cons
+        cons.set_ramp(0, 1, None)
+        if cons.nonholonomic:               # a velocity-level offset may have been set
+            cons.detect_velocity_offset(q[:self.n2], t)
+        if g_end is not None and not self.index2 and self.n_constraints and len(g_end) == cons.n:
+            jump = self.holonomic_residual(q, t) - g_end
+            if np.abs(jump).max() > 1e-14 * (1.0 + np.abs(g_end).max()):
+                cons.set_ramp(t, h, jump)
+        return cons.ramp is not None or cons.velocity_offset
+
+    @engine_call
+    def holonomic_residual(self, q, t):
+        """g(q, t) of the holonomic rows (0 on the others), without any ramp."""
+        if not self.n_constraints:
+            return np.zeros(0)
+        ramp, self.cons.ramp = self.cons.ramp, None
+        try:
+            return self.cons.at(q[:self.n2], t)
+        finally:
+            self.cons.ramp = ramp
+
+    @engine_call
+    def multipliers(self, q, V, t, Vd=None):
+        """λ of the kept rows at (q, V, t): the index-1 solve's Lagrange multipliers, in
+        Exudyn's convention (M q̈ + C_qᵀ λ = Q; A = C_q H, so the twist solve's λ is
+        Exudyn's), from Aᵀ λ = Q̄ - M̄ V̇ with V̇ = f(q, V, t) (given as ``Vd``, or evaluated)."""
+        if Vd is None:
+            Vd = self.f(q, V, t)
+        if not self.n_constraints:
+            return np.zeros(0)
+        q2, V2 = np.asarray(q[:self.n2], float), np.asarray(V[:self.nv], float)
+        if self._compiled:
+            Qb, Mb = self._forces_compiled(q2, V2, t)
+        else:
+            Mb, Qb = self._evaluate(q2, V2, t, need_gamma=False)[:2]
+        A = self._jacobian2(q2)
+        return np.linalg.lstsq(A.T, Qb - Mb @ Vd[:self.nv], rcond=None)[0]
+
+    @engine_call
+    def write_outputs(self, q, V, t, accelerations=True, multipliers=True):
+        """After an output step: the state, and what Exudyn's sensors and solution file read
+        besides it — the accelerations q̈_e (``accelerations``) and, in Exudyn's algebraic
+        coordinates, the Lagrange multipliers of that state (``multipliers``; joint forces:
+        ``ForceLocal`` sensors read them); rows set aside (inactive, redundant) and the
+        Euler-parameter normalizations (τ keeps quaternions unit: no reaction) get 0."""
+        nae = self.engine.nae if multipliers else 0
+        if not accelerations and not nae:
+            self.write_back(q, V, t)
+            return
+        Vd = self.f(q, V, t)
+        q2, V2 = q[:self.n2], V[:self.nv]
+        lam = self.multipliers(q, V, t, Vd) if nae else None
+        self.write_back(q, V, t)
+        if accelerations:
+            self.sd.SetODE2Coordinates_tt(self.nodes.H(q2) @ Vd[:self.nv] + self.nodes.Hdot_V(q2, V2))
+        if nae:
+            ae = np.zeros(nae)
+            ae[self.cons.ae_keep] = lam
+            self.sd.SetAECoordinates(ae)
+
+
+
+def has_prestep(mbs):
+    """True when the system has a pre-step user function (Exudyn returns 0 when unset)."""
+    try:
+        return bool(mbs.GetPreStepUserFunction())
+    except Exception:
+        return False
+
+
+#: contact objects whose data coordinate 0 is the gap (Exudyn's documentation of each)
+GAP_OBJECTS = ("ContactSphereSphere",)
+
+
+def gap_rows(mbs):
+    """Indices, among the system's data coordinates, of the contact gaps (data[0] of the
+    GAP_OBJECTS' data nodes); the other data coordinates (tangential and impact velocities,
+    plastic overlaps) are not switches when they change sign."""
+    sd, rows = mbs.systemData, []
+    for k in range(sd.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        if str(o.get("objectType", "")).removeprefix("Object") in GAP_OBJECTS and "nodeNumber" in o:
+            try:
+                rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[0]))
+            except Exception:
+                pass
+    return np.array(rows, int)
+
+
+def refuse_impact_models(mbs):
+    """InputError before any step for ObjectContactSphereSphere with impactModel 1 or 2: its
+    damping force uses the impact velocity data[2], which Exudyn's PostNewton rewrites at
+    the end of every step, so the force depends on where the steps end and the model has no
+    limit an error-controlled method converges to (a Newton's cradle: dopri5 at 1e-8 and
+    1e-10 differed by 3e-3 and stood 1.4e-2 from Exudyn's own refined solution)."""
+    for k in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        if str(o.get("objectType", "")).removeprefix("Object") == "ContactSphereSphere" and \
+                int(o.get("impactModel", 0)) != 0:
+            raise InputError(
+                f"Exudyn object {k} {o.get('name', '')!r} (ObjectContactSphereSphere) has impactModel = "
+                f"{int(o['impactModel'])}: its impact damping uses the impact velocity that Exudyn's "
+                "PostNewton stores at the end of each of its own steps, so the contact force depends on "
+                "the step sequence and lgt_bridge's steps would not converge to Exudyn's solution. Run "
+                "this model with Exudyn's own exu.SolveDynamic, or use impactModel = 0 with "
+                "contactDamping for the dissipation.")

@@ -1,0 +1,249 @@
+"""Models of issue 21's solver classes (Exudyn items 2, 3, 6, 9, 10), written as Exudyn's
+users write them (Exudyn's own test models and examples are the pattern), each returning
+``(mbs, simulationSettings)`` freshly assembled.
+
+  2  ANCF cable and ANCF beam with damping (Exudyn's ANCFCableBeamDampingTest pattern)
+  3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a pendulum
+     copied by pickling
+  6  a load pulse much shorter than the run (automaticStepSize's maximum step)
+  9  a long chain of rigid bodies on spherical joints (genalpha's Newton test)
+  10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle
+"""
+import exudyn as exu
+import numpy as np
+from exudyn.beams import GenerateStraightLineANCFCable2D
+from exudyn.utilities import (Cable2D, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
+                              MarkerBodyPosition, MarkerNodePosition, MarkerNodeRigid, MassPoint, NodePoint,
+                              NodePointSlope23, NodeRigidBody2D, ObjectANCFBeam, ObjectConnectorSpringDamper,
+                              ObjectGround, RevoluteJoint2D, RigidBody2D)
+
+G2 = [0.0, -9.81, 0.0]
+
+
+def _system():
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    mbs.sys["_SC"] = SC                      # keep the container alive with the system
+    return mbs
+
+
+def settings(T, n):
+    s = exu.SimulationSettings()
+    s.timeIntegration.endTime = T
+    s.timeIntegration.numberOfSteps = n
+    s.timeIntegration.verboseMode = 0
+    s.solution.file.write = False
+    s.solution.sensors.active = False
+    s.show.computationTime = False
+    return s
+
+
+# ---------------------------------------------------------------------------- item 2
+_CABLE = dict(l=0.5, massPerLength=2.0, d=0.02, E=1e8, beta=0.02, betaAxial=0.0005)
+
+
+def _section():
+    c = _CABLE
+    r = c["d"] / 2
+    A, I = np.pi * r ** 2, np.pi * r ** 4 / 4
+    rho = c["massPerLength"] / A
+    return rho * A, rho * I, c["E"] * A, c["E"] * I
+
+
+def ancf_cable_damped(elements=4, load=(0.0, -5.0, 0.0)):
+    """The ANCF cable half of Exudyn's ANCFCableBeamDampingTest: a Cable2D template with
+    bending and axial (Rayleigh) damping meshed by GenerateStraightLineANCFCable2D, clamped
+    at node 0 (fixedConstraintsNode0=[1]*4), a tip load. Returns (mbs, settings, tip node)."""
+    mbs = _system()
+    rhoA, rhoI, EA, EI = _section()
+    c = _CABLE
+    mbs.CreateGround(referencePosition=[0, 0, 0])
+    template = Cable2D(physicsMassPerLength=rhoA, physicsBendingStiffness=EI, physicsAxialStiffness=EA,
+                       physicsBendingDamping=c["beta"] * EI, physicsAxialDamping=c["betaAxial"] * EA,
+                       useReducedOrderIntegration=0)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        nodes = GenerateStraightLineANCFCable2D(mbs, positionOfNode0=[0, 0, 0], positionOfNode1=[c["l"], 0, 0],
+                                                fixedConstraintsNode0=[1] * 4, numberOfElements=elements,
+                                                cableTemplate=template)[0]
+    tip = mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1]))
+    mbs.AddLoad(LoadForceVector(markerNumber=tip, loadVector=list(load)))
+    mbs.Assemble()
+    return mbs, settings(0.1, 25), nodes[-1]
+
+
+def ancf_beam_zero_torsion_inertia(elements=4):
+    """The ANCF beam half of the same test: ObjectANCFBeam on NodePointSlope23 with
+    sectionData.inertia = diag(0, ρI, ρI) (no torsional inertia) and a damping matrix,
+    clamped by a generic joint: its mass matrix is singular (the slopes' axial components
+    carry no mass)."""
+    mbs = _system()
+    rhoA, rhoI, EA, EI = _section()
+    c = _CABLE
+    ground = mbs.CreateGround(referencePosition=[0, 0, 0])
+    sec = exu.BeamSection()
+    sec.stiffnessMatrix = np.diag([EA, EA, EA, EA, EI, EI])
+    sec.inertia = np.diag([0, rhoI, rhoI])
+    sec.massPerLength = rhoA
+    sec.dampingMatrix = np.diag([EA * c["betaAxial"], 0, 0, 0, EI * c["beta"], EI * c["beta"]])
+    le = c["l"] / elements
+    rot = [0, 1, 0, 0, 0, 1]
+    n0 = mbs.AddNode(NodePointSlope23(referenceCoordinates=[0, 0, 1] + rot))
+    markers = [mbs.AddMarker(MarkerNodeRigid(nodeNumber=n0))]
+    for k in range(elements):
+        n1 = mbs.AddNode(NodePointSlope23(referenceCoordinates=[le * (k + 1), 0, 1] + rot))
+        markers.append(mbs.AddMarker(MarkerNodeRigid(nodeNumber=n1)))
+        mbs.AddObject(ObjectANCFBeam(nodeNumbers=[n0, n1], physicsLength=le, sectionData=sec,
+                                     crossSectionPenaltyFactor=[1] * 3))
+        n0 = n1
+    mbs.CreateGenericJoint(itemNumbers=[ground, markers[0]])
+    mbs.AddLoad(LoadForceVector(markerNumber=markers[-1], loadVector=[0, -5, 0]))
+    mbs.Assemble()
+    return mbs, settings(0.1, 25)
+
+
+# ---------------------------------------------------------------------------- item 3
+def iftomm_double_fourbar(t_end=1.0, n=100):
+    """Exudyn's fourBarMechanismIftomm.py: five NodeRigidBody2D bars (m = 1, L = 1,
+    InertiaRodX) on seven RevoluteJoint2D, a double parallelogram (redundant constraints,
+    a singular position when the bars lie flat), gravity by LoadMassProportional, started
+    with v0 = 1."""
+    mbs = _system()
+    L, v0, mass = 1.0, 1.0, 1.0
+    inertia = InertiaRodX(mass, L)
+    ref = [[0, 0.5 * L, 0.5 * np.pi], [0.5 * L, L, 0], [L, 0.5 * L, 0.5 * np.pi], [1.5 * L, L, 0],
+           [2 * L, 0.5 * L, 0.5 * np.pi]]
+    vel = [[0.5 * v0, 0, -v0 / L], [v0, 0, 0], [0.5 * v0, 0, -v0 / L], [v0, 0, 0], [0.5 * v0, 0, -v0 / L]]
+    m0, m1 = [], []
+    for r, v in zip(ref, vel):
+        nd = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=r, initialVelocities=v))
+        ob = mbs.AddObject(RigidBody2D(nodeNumber=nd, physicsMass=inertia.mass,
+                                       physicsInertia=inertia.inertiaTensor[2, 2]))
+        mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=ob)), loadVector=G2))
+        m0.append(mbs.AddMarker(MarkerBodyPosition(bodyNumber=ob, localPosition=[-0.5 * L, 0, 0])))
+        m1.append(mbs.AddMarker(MarkerBodyPosition(bodyNumber=ob, localPosition=[0.5 * L, 0, 0])))
+    ground = mbs.AddObject(ObjectGround())
+    g = [mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[x, 0, 0])) for x in (0, L, 2 * L)]
+    for a, b in ((g[0], m0[0]), (g[1], m0[2]), (g[2], m0[4]), (m1[0], m0[1]), (m1[1], m0[3]), (m1[2], m0[3]),
+                 (m1[3], m1[4])):
+        mbs.AddObject(RevoluteJoint2D(markerNumbers=[a, b]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n)
+
+
+# ---------------------------------------------------------------------------- item 6
+PULSE = dict(t_on=10.01, length=0.05, force=40.0, mass=1.0, t_end=50.0, n=1000)
+
+
+def load_pulse():
+    """A free mass point and a load user function that acts for 0.05 s in a 50 s run
+    (1000 Exudyn steps of 0.05 s): the velocity after the pulse is exactly F·0.05/m = 2,
+    the end position 2·(t_end − t_on − 0.025). Returns (mbs, settings, node)."""
+    p = PULSE
+    mbs = _system()
+    nd = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0]))
+    mbs.AddObject(MassPoint(mass=p["mass"], nodeNumber=nd))
+    mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+
+    def load(mbs, t, load):
+        return [p["force"] if p["t_on"] <= t < p["t_on"] + p["length"] else 0.0, 0, 0]
+
+    mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, 0, 0], loadVectorUserFunction=load))
+    mbs.Assemble()
+    return mbs, settings(p["t_end"], p["n"]), nd
+
+
+def load_pulse_exact():
+    p = PULSE
+    v = p["force"] * p["length"] / p["mass"]
+    return v, v * (p["t_end"] - p["t_on"] - 0.5 * p["length"])
+
+
+# ---------------------------------------------------------------------------- item 10
+def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0):
+    """A chain of n mass points (1 kg) on ObjectConnectorSpringDamper springs of stiffness k
+    (1e7 N/m: a period of 2 ms), the first hung from ground, under gravity."""
+    mbs = _system()
+    ground = mbs.AddObject(ObjectGround())
+    prev = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
+    for i in range(n):
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.1 * (i + 1), 0, 0]))
+        mbs.AddObject(MassPoint(mass=1.0, nodeNumber=nd))
+        mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+        mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[prev, mk], stiffness=k, damping=damping,
+                                                  referenceLength=0.1))
+        mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -9.81, 0]))
+        prev = mk
+    mbs.Assemble()
+    return mbs, settings(t_end, steps)
+
+
+def pendulum():
+    """A rigid bar (EP node, InertiaCuboid) on a revolute joint to ground, swinging under
+    gravity, built with CreateRigidBody/CreateRevoluteJoint."""
+    from exudyn.utilities import InertiaCuboid
+    mbs = _system()
+    ground = mbs.CreateGround()
+    bar = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [1, 0.1, 0.1]), referencePosition=[0.5, 0, 0],
+                              gravity=G2, initialAngularVelocity=[0, 0, 2.0], initialVelocity=[0, 1.0, 0])
+    mbs.CreateRevoluteJoint(bodyNumbers=[ground, bar], position=[0, 0, 0], axis=[0, 0, 1])
+    mbs.Assemble()
+    return mbs, settings(2.0, 100)
+
+
+def pickled_pendulum():
+    """The pendulum copied by pickling, as users copy a system (parameter studies): the copy
+    is appended to a new SystemContainer and assembled again."""
+    import pickle
+    mbs0, s = pendulum()
+    mbs = pickle.loads(pickle.dumps(mbs0))
+    SC = exu.SystemContainer()
+    SC.AppendSystem(mbs)
+    mbs.sys["_SC"] = SC
+    mbs.Assemble()
+    return mbs, s
+
+
+# ---------------------------------------------------------------------------- item 9
+def rigid_chain(n=40, node=exu.NodeType.RotationEulerParameters, t_end=0.5, steps=100, L=0.1, origin=0.0):
+    """A chain of n rigid links (length L, steel bars, InertiaCuboid) on spherical joints, hung from
+    ground at one end, started horizontal and falling under gravity (CreateRigidBody,
+    CreateSphericalJoint, as Exudyn's chain examples build it)."""
+    from exudyn.utilities import InertiaCuboid
+    mbs = _system()
+    ground = mbs.CreateGround()
+    prev = ground
+    for i in range(n):
+        body = mbs.CreateRigidBody(inertia=InertiaCuboid(7800, [L, 0.02, 0.05]),
+                                   nodeType=node, referencePosition=[origin + (i + 0.5) * L, 0, 0], gravity=G2)
+        mbs.CreateSphericalJoint(bodyNumbers=[prev, body], position=[origin + i * L, 0, 0])
+        prev = body
+    mbs.Assemble()
+    return mbs, settings(t_end, steps)
+
+
+def newtons_cradle(n=3, impact_model=2, restitution=0.9, t_end=0.2, steps=200, gap=0.0):
+    """Newton's cradle: n balls (r = 0.05 m, 1 kg mass points, CreateMassPoint) hanging as
+    pendulums (CreateDistanceConstraint to ground, 1 m) in a row along x, touching; the
+    first is released from 0.2 m to the side with 1 m/s towards the others. Neighbours meet
+    by CreateSphereSphereContact with an impact model (impactModel 2: Gonthier / Carvalho-
+    Martins, restitution coefficient) and contact stiffness 1e6 N/m."""
+    mbs = _system()
+    r, length = 0.05, 1.0
+    ground = mbs.CreateGround()
+    balls = []
+    for i in range(n):
+        x = 2 * r * i + (i > 0) * gap
+        start = [x - (0.2 if i == 0 else 0.0), -length, 0]
+        ball = mbs.CreateMassPoint(referencePosition=start, initialVelocity=[1.0 if i == 0 else 0.0, 0, 0],
+                                   physicsMass=1.0, gravity=G2)
+        mbs.CreateDistanceConstraint(bodyNumbers=[ground, ball], localPosition0=[x, 0, 0],
+                                     distance=None)
+        balls.append(ball)
+    for a, b in zip(balls, balls[1:]):
+        mbs.CreateSphereSphereContact(itemNumbers=[a, b], spheresRadii=[r, r], contactStiffness=1e6,
+                                      contactDamping=0.0, impactModel=impact_model,
+                                      restitutionCoefficient=restitution)
+    mbs.Assemble()
+    return mbs, settings(t_end, steps), balls
