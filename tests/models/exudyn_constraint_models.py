@@ -37,23 +37,15 @@ EP = exu.NodeType.RotationEulerParameters
 OVT = exu.OutputVariableType
 
 
-def _system():
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    mbs.sys["_SC"] = SC                      # keep the container alive with the system
-    return mbs
+from exudyn_special_models import _system  # noqa: E402  (the shared system)
+from exudyn_special_models import settings as _settings  # noqa: E402
 
 
 def settings(T, n, index2=False):
-    s = exu.SimulationSettings()
-    s.timeIntegration.endTime = T
-    s.timeIntegration.numberOfSteps = n
-    s.timeIntegration.verboseMode = 0
+    """The shared settings, with index-2 constraints when asked (Exudyn requires Newmark then)."""
+    s = _settings(T, n)
     s.timeIntegration.generalizedAlpha.useIndex2Constraints = index2
-    s.timeIntegration.generalizedAlpha.useNewmark = index2       # Exudyn requires it with index 2
-    s.solution.file.write = False
-    s.solution.sensors.active = False
-    s.show.computationTime = False
+    s.timeIntegration.generalizedAlpha.useNewmark = index2
     return s
 
 

@@ -20,22 +20,7 @@ from exudyn.utilities import (Cable2D, InertiaRodX, LoadForceVector, LoadMassPro
 G2 = [0.0, -9.81, 0.0]
 
 
-def _system():
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    mbs.sys["_SC"] = SC                      # keep the container alive with the system
-    return mbs
-
-
-def settings(T, n):
-    s = exu.SimulationSettings()
-    s.timeIntegration.endTime = T
-    s.timeIntegration.numberOfSteps = n
-    s.timeIntegration.verboseMode = 0
-    s.solution.file.write = False
-    s.solution.sensors.active = False
-    s.show.computationTime = False
-    return s
+from exudyn_special_models import _system, settings  # noqa: E402  (the shared system and settings)
 
 
 # ---------------------------------------------------------------------------- item 2
