@@ -38,8 +38,8 @@ With constraints projected after each step, the interpolated states are projecte
 g is evaluated, and events are located, on the projected trajectory.
 
 Time tolerance: the root is bracketed to ``xtol = 0.01·tol·h`` (h: the step's length, tol:
-the smaller of the run's positive rtol and atol), and never below 4·eps·|t| (brentq's own
-floor). A time error tol·h changes the state by about tol·|Δy| over the step, below the
+the smaller of the run's positive rtol and atol), and never below 4·eps·abs(t) (brentq's own
+floor). A time error tol·h changes the state by about tol·‖Δy‖ over the step, below the
 error the tolerances already allow the step.
 """
 import math

@@ -40,7 +40,8 @@ pytestmark = [
 
 PAGES = ["index", "getting_started", "theory", "performance", "architecture",
          "tutorials/index", "tutorials/exudyn", "tutorials/pinocchio", "tutorials/choosing",
-         "tutorials/stiff", "tutorials/constraints", "auto_examples/index", "api/index"]
+         "tutorials/stiff", "tutorials/constraints", "tutorials/events", "paper_corrections",
+         "auto_examples/index", "api/index"]
 
 #: modules whose every public name must have an entry in the API reference
 API_MODULES = ["lgt_bridge.lgt", "lgt_bridge.params", "lgt_bridge.charts", "lgt_bridge.charts.base",
@@ -48,7 +49,7 @@ API_MODULES = ["lgt_bridge.lgt", "lgt_bridge.params", "lgt_bridge.charts", "lgt_
                "lgt_bridge.groups.quaternion", "lgt_bridge.model", "lgt_bridge.integrators.registry",
                "lgt_bridge.validation", "lgt_bridge.scenes.catalogue", "lgt_bridge.scenes.system",
                "lgt_bridge.bench.runner", "lgt_bridge.bench.registry", "lgt_bridge.bench.metrics",
-               "lgt_bridge.bench.report", "lgt_bridge.auto", "lgt_pinocchio.baselines"]
+               "lgt_bridge.bench.report", "lgt_bridge.auto", "lgt_bridge.events", "lgt_pinocchio.baselines"]
 
 #: entries named in the issue, and the top-level names
 KEY_ENTRIES = ["lgt_bridge.simulate", "lgt_bridge.Simulation", "lgt_bridge.Simulation.run",
