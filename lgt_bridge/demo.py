@@ -21,6 +21,7 @@ RUNS = [
     ("rkmk4", "SE3", "cay", dict(dt=1e-3)),
     ("rkmk4", "SO3xR3", "exp", dict(dt=1e-3)),
     ("rkmk4", "SO3xR3", "cay", dict(dt=1e-3)),
+    ("rkmk4", "SO3xR3", "cay2", dict(dt=1e-3)),
     ("dopri5", "SO3xR3", "exp", dict(rtol=1e-6, atol=1e-6)),
     ("dopri5", "SE3", "exp", dict(rtol=1e-9, atol=1e-9)),
     ("dopri5", "SO3xR3", "exp", dict(rtol=1e-9, atol=1e-9)),
