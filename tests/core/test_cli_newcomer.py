@@ -65,8 +65,8 @@ def test_run_fixed_steps_without_automatic_step_size_and_no_tolerances(tmp_path)
     assert "fixed step 0.001 s (automaticStepSize=False" in p.stdout and "rtol=" not in p.stdout.split("\n")[0]
     p = _cli("run", str(script), "--method", "scipy:RK45")          # as --help says: the settings' tolerances
     assert "rtol=1e-08, atol=1e-08 (from simulationSettings.timeIntegration" in p.stdout, p.stderr
-    readme = (ROOT / "README.md").read_text()
-    assert "else\n  1e-6/1e-8" not in readme and "fixed steps of the script's output step" in readme
+    page = " ".join((ROOT / "docs" / "tutorials" / "exudyn.rst").read_text().split())   # where the README sends users
+    assert "else 1e-6/1e-8" not in page and "fixed steps of the script's output step" in page
 
 
 @pytest.mark.parametrize("args, words", [
@@ -145,7 +145,8 @@ def test_demo_times_warm_runs_and_says_so():
     assert p.returncode == 0, p.stderr
     table, _, note = p.stdout.partition("\n\nwall ms:")
     assert "untimed warm-up run of the same method, group and chart" in note and "Demo total" in note
-    assert "warm demo" in (ROOT / "README.md").read_text()
+    assert "warm demo" in " ".join((ROOT / "docs" / "getting_started.rst").read_text().split())
+    assert "docs/getting_started.rst" in (ROOT / "README.md").read_text()
 
 
 # 9. bench: files named, pose error defined, readable axes -------------------------------
@@ -197,7 +198,7 @@ def test_readme_links_resolve_inside_the_project():
     assert "../shared" not in readme and "ERRATA" not in readme
     for link in re.findall(r"\]\(([^)#]+)\)", readme) + re.findall(r"`(docs/[^`*…]+\.md)`", readme):
         if not link.startswith("http"):
-            assert (ROOT / link).is_file(), link
+            assert (ROOT / link).exists(), link          # a file or a folder (the gallery's sources)
     assert "docs/paper_corrections.md" in readme
     corrections = (ROOT / "docs" / "paper_corrections.md").read_text()
     assert "Müller" in corrections and "SO3exp2" in corrections and "dCayInvSE3" in corrections
@@ -220,7 +221,10 @@ def test_default_group_is_the_recommended_one(tmp_path):
     assert r.group == "SO3xR3"
     assert "(default SO3xR3)" in " ".join(_cli("run", "--help").stdout.split())
     readme = (ROOT / "README.md").read_text()
-    assert 'group="SE3"' not in readme.partition("## Migrating a Pinocchio simulation")[2].partition("##")[0]
+    assert 'group="SE3"' not in readme.partition("## Pinocchio")[2].partition("\n## ")[0]
+    for page in ("getting_started.rst", "tutorials/pinocchio.rst", "tutorials/exudyn.rst"):   # runs shown to newcomers
+        runs = [ln for ln in (ROOT / "docs" / page).read_text().splitlines() if "simulate(" in ln or "SolveDynamic(" in ln]
+        assert runs and not [ln for ln in runs if 'group="SE3"' in ln], page
     if _has("exudyn"):
         assert "ran dopri5 on SO3xR3/exp" in _cli("run", str(PENDULUM)).stdout
 
@@ -248,6 +252,7 @@ def test_pin_state_after_a_failed_run_and_the_readme_snippet():
     assert q.shape == (model.nq,) and v.shape == (model.nv,)
     np.testing.assert_allclose(v[3:6], r.V[-1][:3], atol=1e-14)     # Pinocchio's v: linear first, then ω
     assert "r.success" in (ROOT / "README.md").read_text()
+    assert "if not r.success:" in (ROOT / "docs" / "tutorials" / "pinocchio.rst").read_text()
 
 
 # 14. demo validates before printing -------------------------------------------------------
