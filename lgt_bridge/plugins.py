@@ -21,8 +21,28 @@ def adapters():
 
 
 def wrap(obj, **options):
-    """A :class:`~lgt_bridge.model.Model` for ``obj`` (an Exudyn MainSystem, a Pinocchio
-    model, ...) from the first adapter that accepts it; a Model is returned as is."""
+    """A :class:`~lgt_bridge.model.Model` for an engine's model, from the first adapter
+    that accepts it.
+
+    Parameters
+    ----------
+    obj : object
+        An Exudyn ``MainSystem`` (assembled), a Pinocchio ``Model``, ... — or a
+        :class:`~lgt_bridge.model.Model`, returned as is.
+    **options
+        Passed to the adapter's model (e.g. ``q0``, ``v0``, ``tau`` of
+        :class:`lgt_pinocchio.PinocchioModel`).
+
+    Returns
+    -------
+    lgt_bridge.model.Model
+        e.g. an :class:`lgt_exudyn.ExudynModel` or :class:`lgt_pinocchio.PinocchioModel`.
+
+    Raises
+    ------
+    lgt_bridge.InputError
+        No installed adapter accepts ``obj`` (the message lists the adapters tried).
+    """
     if isinstance(obj, Model):
         return obj
     tried = []
