@@ -66,15 +66,52 @@ def registry_implicit(method):
 
 
 class Simulation:
-    """A model on a method, set up once (see the module docstring). Options as
-    :func:`~lgt_bridge.simulate`; ``t_end``: the end of the run, when known (adaptive
-    methods with dense output then step freely up to it); ``max_step``: the largest step an
-    adaptive method may take (None: no cap); ``fixed_steps``: an adaptive pair
-    runs fixed steps of ``dt`` with its own tableau; ``min_step`` (> 0): an error-controlled
-    step shrinking below it ends the run, with ``min_step_why`` as the advice.
+    """A model on a method, set up once and advanced again and again (see the module docstring).
 
-    State: ``t``, ``q``, ``V``; counters ``n_steps``, ``n_redone``; ``initial_projection``
-    (how far the initial state was moved onto the constraints; None: it was consistent)."""
+    Set-up (the checks, ``auto``, the method's stepper, a consistent initial state) happens
+    here; :meth:`run` and :meth:`advance_to` then carry the state from call to call, so
+    consecutive short horizons (model-predictive control, rollouts) pay for it once.
+
+    Parameters
+    ----------
+    model : lgt_bridge.model.Model
+        As :func:`~lgt_bridge.simulate`.
+    method, group, chart, dt, rtol, atol, max_steps, project, rho_inf, newton_tol, max_step
+        As :func:`~lgt_bridge.simulate`.
+    q0, V0 : ndarray, optional
+        The initial state (default: the model's).
+    t0 : float, default 0.0
+        The initial time.
+    t_end : float, optional
+        The end of the run, when known (adaptive methods with dense output then step freely
+        up to it); each :meth:`run` sets it again.
+    fixed_steps : bool, default False
+        An adaptive pair runs fixed steps of ``dt`` with its own tableau.
+    min_step : float, default 0.0
+        (> 0) an error-controlled step shrinking below it ends the run, with
+        ``min_step_why`` as the advice.
+    checked : bool, default False
+        The options and the initial state were checked by the caller already
+        (:func:`~lgt_bridge.simulate` checks them first).
+
+    Attributes
+    ----------
+    t, q, V
+        The current time and state (the model's own coordinates).
+    n_steps, n_redone : int
+        Accepted steps so far, steps redone for discontinuous states.
+    initial_projection : float or None
+        How far the initial state was moved onto the constraints (None: it was consistent).
+
+    Examples
+    --------
+    >>> from lgt_bridge import Simulation, scenes
+    >>> sim = Simulation(scenes.heavy_top(True), method="dop853", rtol=1e-8, atol=1e-8)
+    >>> for k in range(1, 4):
+    ...     r = sim.run(0.02 * k)          # from where the last call ended
+    >>> round(sim.t, 12)
+    0.06
+    """
 
     #: redos of one short step when the model's discontinuous states keep changing
     MAX_DISCONTINUOUS = 5
@@ -378,11 +415,28 @@ class Simulation:
         return accepted, h_new
 
     def advance_to(self, target, on_step=None):
-        """Step until ``target`` is reached; returns (q, V) at ``target`` (interpolated
-        within the last step when the method has dense output). A failed step raises
-        :class:`~.errors.StepError` (:class:`~.errors.ModelError` when the engine raised,
-        :class:`~.errors.ChartDomainError` for a fixed step beyond its chart's domain), the
-        stepper at the last good step (``q``, ``V``, ``t``)."""
+        """Step until ``target`` is reached, without collecting states.
+
+        Parameters
+        ----------
+        target : float
+            The time to reach (≥ the current time).
+        on_step : callable, optional
+            ``on_step(t, q, V)`` after every accepted step.
+
+        Returns
+        -------
+        q, V : ndarray
+            The state at ``target`` (interpolated within the last step when the method has
+            dense output).
+
+        Raises
+        ------
+        lgt_bridge.StepError
+            A failed step (:class:`~.errors.ModelError` when the engine raised,
+            :class:`~.errors.ChartDomainError` for a fixed step beyond its chart's domain);
+            the simulation stays at the last good step (``q``, ``V``, ``t``).
+        """
         try:
             return self._advance_to(target, on_step)
         except StepFailed as exc:
@@ -402,14 +456,32 @@ class Simulation:
         return st.dense(target)
 
     def run(self, t_end, t_eval=None, progress=None, events=None):
-        """Advance from the current time to ``t_end``, collecting the state at every step
-        (``t_eval`` None; the start included) or at ``t_eval``; returns a
-        :class:`~.result.SimulationResult` of this stretch. A failed step ends it with
-        ``success=False`` (every step before it kept, the model at the last good state); a
-        fixed-step chart overrun raises ChartDomainError with the result as ``.result``.
-        ``events``: functions g(t, q, V) whose zero crossings are located and returned as
-        ``t_events``/``q_events``/``V_events``; a terminal one ends the run there
-        (:mod:`lgt_bridge.events`)."""
+        """Advance from the current time to ``t_end``, collecting the states.
+
+        Parameters
+        ----------
+        t_end : float
+            The end of this stretch (> the current time).
+        t_eval : array_like, optional
+            Output times within the stretch (default: every step, the start included).
+        progress : bool, optional
+            As :func:`~lgt_bridge.simulate`.
+        events : callable or list of callable, optional
+            Functions g(t, q, V) whose zero crossings are located and returned as
+            ``t_events``/``q_events``/``V_events``; a terminal one ends the run there
+            (:mod:`lgt_bridge.events`).
+
+        Returns
+        -------
+        SimulationResult
+            This stretch. A failed step ends it with ``success=False`` (every step before it
+            kept, the model at the last good state).
+
+        Raises
+        ------
+        lgt_bridge.ChartDomainError
+            A fixed-step chart overrun, with the result so far as ``.result``.
+        """
         t0, t1 = self.t, float(t_end)
         if not t1 > t0:
             raise InputError(f"t_end = {t1} must be greater than the simulation's time t = {t0}.")
