@@ -204,3 +204,25 @@ def test_a_worker_process_that_dies_costs_only_its_own_run(tmp_path):
         assert by[key]["success"] and by[key]["pose_error"] < 1e-5 and by[key]["wall_repeats"] == 1
     text = bench.write_report(tmp_path, f"{f}:make", ref, rows, plots=False).read_text()
     assert "WorkerDied" in text
+
+
+def _blas_threads():
+    from threadpoolctl import threadpool_info
+    return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+
+def test_sweep_workers_run_one_blas_thread():
+    """A pool already fills the cores: its workers' BLAS pools are limited to one thread each,
+    while this process keeps its own (compared in the same run)."""
+    from threadpoolctl import threadpool_limits
+    from lgt_bridge.bench import runner
+    if not _blas_threads():
+        pytest.skip("numpy reports no BLAS library to limit")
+    with threadpool_limits(2):                      # the parent's pool as a user's machine sets it
+        parent = _blas_threads()
+        submit, _, close = runner._executor(2, None)
+        try:
+            workers = [submit(_blas_threads).result() for _ in range(4)]
+        finally:
+            close()
+    assert all(w == [1] * len(parent) for w in workers), (parent, workers)
