@@ -242,9 +242,14 @@ class ExudynModel(StepHooks, Model):
         if not self._compiled:
             return self.cons.Cq() @ self.nodes.H(q)
         P = self._pack()
+        q = np.ascontiguousarray(q, float)
+        if P.sp is not None and P.sp.joints is not None:        # closed-form rows: no Exudyn Jacobian
+            J, Jf = P.sp.joints
+            self._kernels.joint_rows(P.T, q, np.zeros(self.nv), J, Jf, P.sp.aval, P.gam)
+            return P.sp.dense(self.n_constraints, self.nv)
         A = np.empty((self.n_constraints, self.nv))
         C = self.engine.ae_jacobian_full(1.0, 1.0 if self.cons.nonholonomic else 0.0)
-        self._kernels.constraint_matrix(P.T, P.off, P.w, np.ascontiguousarray(q, float), C, P.rows, A)
+        self._kernels.constraint_matrix(P.T, P.off, P.w, q, C, P.rows, A)
         return A
 
     def _solve_mass2(self, q, B):
