@@ -25,6 +25,15 @@ def independent_rows(A):
         return np.ones(0, bool)
     norms = np.linalg.norm(A, axis=1)
     An = A / np.where(norms > 0, norms, 1.0)[:, None]
+    if n > 50 and norms.min() > 0.0:
+        # large models (the QR costs O(n² nv)): every row is kept when σ_min(An)² > 1e-6, i.e.
+        # An Anᵀ - 1e-6 I has a Cholesky factor (backward stable: its rounding is ~n eps ≪
+        # 1e-6); the pivoted QR's diagonal is at least σ_min ≫ RANK_TOL, so it keeps them all
+        try:
+            np.linalg.cholesky(An @ An.T - 1e-6 * np.eye(n))
+            return np.ones(n, bool)
+        except np.linalg.LinAlgError:
+            pass
     _, R, piv = qr(An.T, mode="economic", pivoting=True)
     d = np.abs(np.diagonal(R))
     rank = int(np.sum(d > RANK_TOL * max(d.max(initial=0.0), 1e-300)))

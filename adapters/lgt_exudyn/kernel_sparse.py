@@ -10,7 +10,9 @@
   sparse (CSR), M̄⁻¹Aᵀ on its pattern, and S = A M̄⁻¹ Aᵀ in the rows' reverse Cuthill–McKee
   order factorized in its envelope (:func:`lgt_bridge.kernels.linalg.envelope_cholesky`);
   work in proportion to the nonzeros of A, S and L. Flags as ``solve``'s (1: finish with
-  :func:`.kernels.sparse_fallback`); λ stays in F's LAM section, in the model's row order.
+  :func:`.kernels.sparse_fallback`); λ stays in F's LAM section, in the model's row order;
+* :func:`sparse_correction` (T, off, w, I, io, F, fo, aval, r, out) -> flag: out =
+  M̄⁻¹Aᵀ(A M̄⁻¹ Aᵀ)⁻¹ r, the projections' step on the same structure.
 
 The numpy references are Exudyn's dense Jacobian mapped to twists (C_q H), the γ
 differences of :mod:`.constraints` and ``lgt_bridge.model.solve_kkt``;
@@ -84,34 +86,19 @@ def joint_rows(T, q, V, J, Jf, aval, gam):
         gam[i] = g_sum
 
 
-@njit(f"int64({_T}, {_I}, {_V}, {_I}, {_I}, {_V}, {_I}, {_V}, {_V}, {_V}, {_V})", cache=True,
-      error_model="numpy")
-def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
-    """V̇ = M̄⁻¹(Q̄ - Aᵀλ), (A M̄⁻¹ Aᵀ) λ = A M̄⁻¹ Q̄ + γ with A in CSR (values ``aval``) and
-    the constant M̄'s diagonal blocks packed. Returns 0; 1 when the envelope Cholesky factor
-    of S has a non-positive or relatively small (PIVOT_TOL) pivot; M̄⁻¹Q̄ is then in
-    w[OMIQ:] and A's values in ``aval`` (finish with ``sparse_fallback``)."""
-    nv = off[NV_]
+@njit(cache=True, error_model="numpy")
+def _factor(T, off, w, I, io, F, fo, aval):
+    """Y = M̄⁻¹Aᵀ on its pattern and the envelope Cholesky factor of S = A M̄⁻¹ Aᵀ (rows
+    permuted) into F; True when it is well positive definite (PIVOT_TOL)."""
     aptr, acol = I[io[APTR]:io[APTR + 1]], I[io[ACOL]:io[ACOL + 1]]
     yptr, ycol = I[io[YPTR]:io[YPTR + 1]], I[io[YCOL]:io[YCOL + 1]]
     perm, sptr, sidx = I[io[PERM]:io[PERM + 1]], I[io[SPTR]:io[SPTR + 1]], I[io[SIDX]:io[SIDX + 1]]
     first, estart = I[io[FIRST]:io[FIRST + 1]], I[io[ESTART]:io[ESTART + 1]]
     comp_of, pos_in = I[io[COMPOF]:io[COMPOF + 1]], I[io[POSIN]:io[POSIN + 1]]
-    yval, S = F[fo[YVAL]:fo[YVAL + 1]], F[fo[SENV]:fo[SENV + 1]]
-    rhs, lam, x = F[fo[RHS]:fo[RHS + 1]], F[fo[LAM]:fo[LAM + 1]], F[fo[XS]:fo[XS + 1]]
-    nc = perm.shape[0]
-    if (Qbar.shape[0] != nv or Vd.shape[0] != nv or gam.shape[0] != nc or aval.shape[0] != acol.shape[0]
-            or x.shape[0] != nv or off[RMEMBER] == off[RCOMP]):
-        raise ValueError("sparse_solve: Qbar, Vd need nv entries, gam nc, aval the pattern's; M̄ packed")
-    mem, wm = off[RMEMBER], off[OMIQ]
-    for c in range(off[RCOMP], off[RMEMBER]):          # M̄⁻¹Q̄ block by block
-        a, n = T[c, START], T[c, SIZE]
-        base = off[OMBI] + T[c, FOFF]
-        for i in range(n):
-            s = 0.0
-            for j in range(n):
-                s += w[base + n * i + j] * Qbar[T[mem + a + j, MEMBER]]
-            w[wm + T[mem + a + i, MEMBER]] = s
+    yval, S, x = F[fo[YVAL]:fo[YVAL + 1]], F[fo[SENV]:fo[SENV + 1]], F[fo[XS]:fo[XS + 1]]
+    nc, mem = perm.shape[0], off[RMEMBER]
+    if aval.shape[0] != acol.shape[0] or x.shape[0] != off[NV_] or off[RMEMBER] == off[RCOMP]:
+        raise ValueError("sparse solve: aval needs the pattern's entries; M̄ packed")
     for k in range(nc):                                 # Y_k = M̄⁻¹ A_kᵀ on its pattern
         for e in range(aptr[k], aptr[k + 1]):
             x[acol[e]] += aval[e]
@@ -126,7 +113,7 @@ def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
             yval[e] = s
         for e in range(aptr[k], aptr[k + 1]):
             x[acol[e]] = 0.0
-    for p in range(nc):                                 # S (permuted) in its envelope; rhs
+    for p in range(nc):                                 # S (permuted) in its envelope
         i = perm[p]
         for e in range(aptr[i], aptr[i + 1]):
             x[acol[e]] += aval[e]
@@ -140,21 +127,86 @@ def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
             for e in range(yptr[k], yptr[k + 1]):
                 s += x[ycol[e]] * yval[e]
             S[si + pk] = s
-        s = 0.0
         for e in range(aptr[i], aptr[i + 1]):
             x[acol[e]] = 0.0
-            s += aval[e] * w[wm + acol[e]]
-        rhs[p] = s + gam[i]
     ok, dmin, dmax = envelope_cholesky(S, first, estart)
-    if not ok or not dmin > PIVOT_TOL * dmax:
-        return 1
+    return ok and dmin > PIVOT_TOL * dmax
+
+
+@njit(cache=True, error_model="numpy")
+def _back(I, io, F, fo, out):
+    """λ = S⁻¹ rhs (rhs permuted, in F) into F's LAM in the rows' order; out -= Y λ."""
+    yptr, ycol = I[io[YPTR]:io[YPTR + 1]], I[io[YCOL]:io[YCOL + 1]]
+    perm, first, estart = I[io[PERM]:io[PERM + 1]], I[io[FIRST]:io[FIRST + 1]], I[io[ESTART]:io[ESTART + 1]]
+    yval, S = F[fo[YVAL]:fo[YVAL + 1]], F[fo[SENV]:fo[SENV + 1]]
+    rhs, lam = F[fo[RHS]:fo[RHS + 1]], F[fo[LAM]:fo[LAM + 1]]
     envelope_solve(S, first, estart, rhs)
-    for j in range(nv):
-        Vd[j] = w[wm + j]
-    for p in range(nc):
+    for p in range(perm.shape[0]):
         k = perm[p]
         lk = rhs[p]
         lam[k] = lk
         for e in range(yptr[k], yptr[k + 1]):
-            Vd[ycol[e]] -= yval[e] * lk
+            out[ycol[e]] -= yval[e] * lk
+
+
+@njit(cache=True, error_model="numpy")
+def _miq(T, off, w, Qbar):
+    """M̄⁻¹Q̄ block by block into w[OMIQ:]; returns OMIQ's offset."""
+    mem, wm = off[RMEMBER], off[OMIQ]
+    for c in range(off[RCOMP], off[RMEMBER]):
+        a, n = T[c, START], T[c, SIZE]
+        base = off[OMBI] + T[c, FOFF]
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                s += w[base + n * i + j] * Qbar[T[mem + a + j, MEMBER]]
+            w[wm + T[mem + a + i, MEMBER]] = s
+    return wm
+
+
+@njit(f"int64({_T}, {_I}, {_V}, {_I}, {_I}, {_V}, {_I}, {_V}, {_V}, {_V}, {_V})", cache=True,
+      error_model="numpy")
+def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
+    """V̇ = M̄⁻¹(Q̄ - Aᵀλ), (A M̄⁻¹ Aᵀ) λ = A M̄⁻¹ Q̄ + γ with A in CSR (values ``aval``) and
+    the constant M̄'s diagonal blocks packed. Returns 0; 1 when the envelope Cholesky factor
+    of S has a non-positive or relatively small (PIVOT_TOL) pivot; M̄⁻¹Q̄ is then in
+    w[OMIQ:] and A's values in ``aval`` (finish with ``sparse_fallback``)."""
+    nv = off[NV_]
+    aptr, acol = I[io[APTR]:io[APTR + 1]], I[io[ACOL]:io[ACOL + 1]]
+    perm, rhs = I[io[PERM]:io[PERM + 1]], F[fo[RHS]:fo[RHS + 1]]
+    nc = perm.shape[0]
+    if Qbar.shape[0] != nv or Vd.shape[0] != nv or gam.shape[0] != nc:
+        raise ValueError("sparse_solve: Qbar, Vd need nv entries, gam nc")
+    if not _factor(T, off, w, I, io, F, fo, aval):
+        _miq(T, off, w, Qbar)
+        return 1
+    wm = _miq(T, off, w, Qbar)
+    for p in range(nc):
+        i = perm[p]
+        s = 0.0
+        for e in range(aptr[i], aptr[i + 1]):
+            s += aval[e] * w[wm + acol[e]]
+        rhs[p] = s + gam[i]
+    for j in range(nv):
+        Vd[j] = w[wm + j]
+    _back(I, io, F, fo, Vd)
+    return 0
+
+
+@njit(f"int64({_T}, {_I}, {_V}, {_I}, {_I}, {_V}, {_I}, {_V}, {_V}, {_V})", cache=True, error_model="numpy")
+def sparse_correction(T, off, w, I, io, F, fo, aval, r, out):
+    """out = M̄⁻¹Aᵀ (A M̄⁻¹ Aᵀ)⁻¹ r (the M̄-orthogonal correction a projection onto A x = r
+    subtracts). Returns 0; 1 as :func:`sparse_solve` (redundant rows: solve densely)."""
+    perm, rhs = I[io[PERM]:io[PERM + 1]], F[fo[RHS]:fo[RHS + 1]]
+    if r.shape[0] != perm.shape[0] or out.shape[0] != off[NV_]:
+        raise ValueError("sparse_correction: r needs nc entries, out nv")
+    if not _factor(T, off, w, I, io, F, fo, aval):
+        return 1
+    for p in range(perm.shape[0]):
+        rhs[p] = r[perm[p]]
+    for j in range(out.shape[0]):
+        out[j] = 0.0
+    _back(I, io, F, fo, out)
+    for j in range(out.shape[0]):
+        out[j] = -out[j]
     return 0

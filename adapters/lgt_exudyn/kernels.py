@@ -26,13 +26,13 @@ from lgt_bridge.model import solve_schur
 from .constraints import EPS_GAMMA
 from .kernel_maps import constraint_matrix, forces, gamma_fd, write
 from .kernel_solve import free_rhs, solve
-from .kernel_sparse import joint_rows, sparse_solve
+from .kernel_sparse import joint_rows, sparse_correction, sparse_solve
 from .kernel_tables import OMIQ, OS, OR, OY
 from .kernel_tables import pack as pack_tables
 from . import sparse
 
 __all__ = ["pack", "write", "forces", "constraint_matrix", "gamma_fd", "solve", "free_rhs", "buffers",
-           "solve_fallback", "plain_f", "f_compiled", "joint_rows", "sparse_solve", "sparse_fallback", "SparseRows"]
+           "solve_fallback", "plain_f", "f_compiled", "joint_rows", "sparse_solve", "sparse_fallback", "SparseRows", "constraint_schur"]
 
 #: the closed-form rows are taken when they equal Exudyn's Jacobian to this (relative) and γ's
 #: differences to GAMMA_CHECK at the analysis
@@ -51,6 +51,8 @@ class SparseRows:
         self.rows = np.repeat(np.arange(len(aptr) - 1), np.diff(aptr))
         self.flat = self.rows * P.nv + acol
         self.aval = np.zeros(len(acol))
+        #: the last sparse_solve left λ (unique: no redundant rows) in F's LAM section
+        self.lam_ok = False
         self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol)
 
     def dense(self, nc, nv):
@@ -135,6 +137,41 @@ def _pattern_holds(model, P, sp):
         return True
     finally:
         sd.SetODE2Coordinates(keep)
+
+
+def sparse_values(model, P, q):
+    """A's values at q into P.sp.aval (closed form, or gathered from Exudyn's dense Jacobian;
+    the system's coordinates are then q's)."""
+    sp = P.sp
+    if sp.joints is not None:
+        joint_rows(P.T, q, np.zeros(P.nv), sp.joints[0], sp.joints[1], sp.aval, P.gam)
+    else:
+        model.sd.SetODE2Coordinates(q - model.ref)
+        E = model.engine
+        constraint_matrix(P.T, P.off, P.w, q, E.ae_jacobian_full(1.0, 1.0 if model.cons.nonholonomic else 0.0),
+                          P.rows, P.A)
+        np.take(P.A.ravel(), sp.flat, out=sp.aval)
+    return sp.aval
+
+
+def constraint_schur(model, P, q):
+    """(A, correct) of ``Model.constraint_schur`` from the sparse rows: A as a scipy CSR
+    matrix, correct(r) = M̄⁻¹Aᵀ(A M̄⁻¹ Aᵀ)⁻¹ r by :func:`.kernel_sparse.sparse_correction` (the
+    dense minimum-norm solve when rows are redundant)."""
+    from scipy.sparse import csr_matrix
+    sp, nv, nc = P.sp, P.nv, model.n_constraints
+    aval = sparse_values(model, P, np.ascontiguousarray(q, float)).copy()
+    A = csr_matrix((aval, sp.acol, sp.aptr), shape=(nc, nv))
+
+    def correct(r):
+        out = np.empty(nv)
+        r = np.ascontiguousarray(r, float)
+        if sparse_correction(P.T, P.off, P.w, sp.I, sp.io, sp.F, sp.fo, aval, r, out) == 0:
+            return out
+        Ad = A.toarray()
+        MiAt = model._solve_mass2(q, Ad.T)
+        return MiAt @ solve_schur(Ad @ MiAt, r)
+    return A, correct
 
 
 def sparse_fallback(model, P, q, gam, Vd):
@@ -232,7 +269,8 @@ def f_compiled(model, P, q, V, t):
         if sp.joints is None:
             constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, P.A)
             np.take(P.A.ravel(), sp.flat, out=sp.aval)
-        if sparse_solve(T, off, w, sp.I, sp.io, sp.F, sp.fo, sp.aval, P.Qbar, gam, Vd) == 1:
+        sp.lam_ok = sparse_solve(T, off, w, sp.I, sp.io, sp.F, sp.fo, sp.aval, P.Qbar, gam, Vd) == 0
+        if not sp.lam_ok:
             sparse_fallback(model, P, q, gam, Vd)
         return Vd
     if nc:

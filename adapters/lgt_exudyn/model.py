@@ -244,8 +244,7 @@ class ExudynModel(StepHooks, Model):
         P = self._pack()
         q = np.ascontiguousarray(q, float)
         if P.sp is not None and P.sp.joints is not None:        # closed-form rows: no Exudyn Jacobian
-            J, Jf = P.sp.joints
-            self._kernels.joint_rows(P.T, q, np.zeros(self.nv), J, Jf, P.sp.aval, P.gam)
+            self._kernels.sparse_values(self, P, q)
             return P.sp.dense(self.n_constraints, self.nv)
         A = np.empty((self.n_constraints, self.nv))
         C = self.engine.ae_jacobian_full(1.0, 1.0 if self.cons.nonholonomic else 0.0)
@@ -344,6 +343,15 @@ class ExudynModel(StepHooks, Model):
     def constraint_jacobian(self, q):
         A = self._jacobian2(q[:self.n2])
         return A if self.ode1 is None else self.ode1.jacobian(A)
+
+    @engine_call
+    def constraint_schur(self, q, rows=None):
+        """``Model.constraint_schur`` on the sparse rows of the compiled backend (A sparse, the
+        correction by the envelope factor of A M̄⁻¹ Aᵀ), densely otherwise."""
+        P = self._pack() if self._compiled and self.ode1 is None and self.n_constraints else None
+        if P is None or P.sp is None or (rows is not None and len(rows) != self.n_constraints):
+            return Model.constraint_schur(self, q, rows)
+        return self._kernels.constraint_schur(self, P, q[:self.n2])
 
     @engine_call
     def constraint_gamma(self, q, V, t=None):

@@ -167,3 +167,23 @@ def test_unknown_joints_keep_the_dense_path():
     SC, mbs = tk.offset_com_pendulum()
     P = K.pack(ExudynModel(mbs))
     assert P.sp is None
+
+
+@pytest.mark.parametrize("name", ["chain EP", "loop RotVecLG", "revolute chain EP"])
+def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, rng):
+    """The projections' step (Model.constraint_schur) and the Lagrange multipliers written for
+    Exudyn's sensors, from the sparse rows, against the dense defaults (lgt_bridge.model's
+    dense constraint_schur, the least-squares multipliers of the numpy backend)."""
+    from lgt_bridge.model import Model
+    table = SPHERICAL if name in SPHERICAL else GATHERED
+    _, m, P = build(table, name)
+    ref = ExudynModel(m.mbs, backend="numpy")
+    for q, V, t in states(m, rng, 2):
+        A, correct = m.constraint_schur(q)
+        Ad, correct_d = Model.constraint_schur(ref, q)
+        assert close(A.toarray(), Ad, 1e-13)
+        r = rng.normal(size=m.n_constraints)
+        tol = max(1e-12, 10 * np.finfo(float).eps * np.linalg.cond(Ad @ np.linalg.solve(m.Mbar, Ad.T)))
+        assert close(correct(r), correct_d(r), tol)
+        assert close(A @ correct(r), r, tol)                  # the step lands on A x = r
+        assert close(m.multipliers(q, 0.3 * V, t), ref.multipliers(q, 0.3 * V, t), 1e-7)
