@@ -388,16 +388,13 @@ class ExudynModel(StepHooks, Model):
     def check_mass_matrix(self, q):
         """InputError when the twist mass matrix at q is singular or indefinite (as
         ``simulate`` checks every model before the first step; the ODE2 part's: the ODE1
-        block is the identity); a constant positive definite M̄ is checked once, by a
-        Cholesky factorization, for all later runs."""
+        block is the identity); a constant positive definite M̄ is checked once, by the
+        Cholesky factors of its diagonal blocks, for all later runs."""
         from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self.Mbar is not None:
             if self._Mbar_pd is None:
-                try:
-                    np.linalg.cholesky(self.Mbar)
-                    self._Mbar_pd = True
-                except np.linalg.LinAlgError:
-                    self._Mbar_pd = False
+                from .kernel_tables import positive_definite
+                self._Mbar_pd = positive_definite(self.Mbar)
             if self._Mbar_pd:
                 return
         if self.nv > MASS_CHECK_MAX_NV:
