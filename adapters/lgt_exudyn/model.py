@@ -288,7 +288,7 @@ class ExudynModel(StepHooks, Model):
         return self.ode1.solve_mass(lambda b: self._solve_mass2(q[:self.n2], b), B)
 
     @engine_call
-    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos):
+    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos, sparse=False):
         """M̄ c_acc + C_t c_vel + K_t c_pos for generalized-α's Newton matrix, in the twists V and
         the SO(3)xR³ increments z (the derivatives of R = M̄ V̇ - Q̄(q(z), V, t)), from Exudyn's
         own Jacobians of its ODE2 right-hand side Q_e (ComputeJacobianODE2RHS, loads included):
@@ -301,18 +301,25 @@ class ExudynModel(StepHooks, Model):
         body (tests/test_exudyn_iteration.py): C_t to 3e-8, K_t to 0.1 % (RotVecLG) and 4 % (EP),
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
         not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
-        for the calls at the same (q, V, t)."""
-        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes())
+        for the calls at the same (q, V, t). ``sparse``: scipy.sparse matrices (products with
+        a sparse H: large models), as generalized-α asks above its sparse size."""
+        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
         cached = getattr(self, "_it_cache", None)
         if cached is None or cached[0] != key:
             S, n2 = self.solver, self.n2
             H = self.nodes.H(np.asarray(q, float))
             Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
             self.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
-            parts = [Mbar]
+            if sparse:
+                from scipy.sparse import csr_matrix as to
+                H = to(H)
+            else:
+                def to(X):
+                    return X
+            parts = [to(Mbar)]
             for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
                 S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
-                J = np.asarray(S.GetSystemJacobian())[:n2, :n2]
+                J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
                 parts.append(-(H.T @ (J @ H)))
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)

@@ -187,3 +187,12 @@ def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, rng):
         assert close(correct(r), correct_d(r), tol)
         assert close(A @ correct(r), r, tol)                  # the step lands on A x = r
         assert close(m.multipliers(q, 0.3 * V, t), ref.multipliers(q, 0.3 * V, t), 1e-7)
+
+
+def test_sparse_iteration_matrix_equals_the_dense_one(rng):
+    """generalized-α's Newton parts asked sparse (large models) equal the dense ones."""
+    _, m, P = build(SPHERICAL, "tree EP")
+    for q, V, t in states(m, rng, 2):
+        for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (2.0, 0.5, 3.0)):
+            dense = m.iteration_matrix(q, V, t, *c)
+            assert close(m.iteration_matrix(q, V, t, *c, sparse=True).toarray(), dense, 1e-13)
