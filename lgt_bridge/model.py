@@ -260,5 +260,19 @@ def _solve_mass_dense(model, q, B):
     return np.linalg.solve(model.mass_matrix(q), B)
 
 
+def _constraint_schur_dense(model, q, rows=None):
+    """(A, correct): the constraint Jacobian at q (its ``rows``, all when None; anything with
+    ``A @ V``) and correct(r) = M⁻¹Aᵀ (A M⁻¹ Aᵀ)⁺ r, the M-orthogonal step onto A x = r that
+    projections subtract (minimum norm, :func:`solve_schur`). Dense by default; models with
+    sparse constraint rows override it."""
+    A = model.constraint_jacobian(q)
+    if rows is not None:
+        A = A[rows]
+    MiAt = model.solve_mass(q, A.T)
+    S = A @ MiAt
+    return A, lambda r: MiAt @ solve_schur(S, r)
+
+
 Model.solve_mass = _solve_mass_dense
 Model.solve_mass.__doc__ = "M(q)⁻¹ B (dense by default; models with block-diagonal M override it)."
+Model.constraint_schur = _constraint_schur_dense

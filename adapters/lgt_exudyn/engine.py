@@ -35,9 +35,9 @@ def engine_call(method):
     ModelError naming the time and Exudyn's message (:func:`engine_error`); the original
     stays chained (``--debug`` shows it)."""
     @functools.wraps(method)
-    def call(self, *args):
+    def call(self, *args, **kwargs):
         try:
-            return method(self, *args)
+            return method(self, *args, **kwargs)
         except LGTError:
             raise
         except Exception as exc:

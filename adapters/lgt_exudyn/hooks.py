@@ -11,6 +11,7 @@ from lgt_bridge.errors import InputError
 
 from .constraints import ConstraintRows
 from .engine import engine_call
+from .sparse import LAM
 
 
 class StepHooks:
@@ -94,6 +95,11 @@ class StepHooks:
         """λ of the kept rows at (q, V, t): the index-1 solve's Lagrange multipliers, in
         Exudyn's convention (M q̈ + C_qᵀ λ = Q; A = C_q H, so the twist solve's λ is
         Exudyn's), from Aᵀ λ = Q̄ - M̄ V̇ with V̇ = f(q, V, t) (given as ``Vd``, or evaluated)."""
+        sp = getattr(self._P, "sp", None) if self._compiled and self.ode1 is None else None
+        if sp is not None:                  # the sparse solve keeps the λ of its last f
+            Vd = self.f(q, V, t)
+            if sp.lam_ok:
+                return sp.F[sp.fo[LAM]:sp.fo[LAM + 1]].copy()
         if Vd is None:
             Vd = self.f(q, V, t)
         if not self.n_constraints:

@@ -75,16 +75,35 @@ def components(Mb):
     return order.astype(np.int64), np.unique(lab, return_counts=True)[1].astype(np.int64)
 
 
-def _block_inverses(Mb, members, sizes):
-    """{size: (component indices, blocks, inverses)} of the diagonal blocks of M̄, components
-    of one size inverted in one call through their Cholesky factors; None when a block is not
-    positive definite (singular or indefinite: it then has no inverse of its own)."""
+def _blocks_by_size(Mb, members, sizes):
+    """{size: (component indices, their diagonal blocks (k, size, size))} of M̄."""
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     out = {}
     for size in np.unique(sizes):
         cs = np.flatnonzero(sizes == size)
         idx = members[start[cs][:, None] + np.arange(size)]                 # (k, size)
-        blks = Mb[idx[:, :, None], idx[:, None, :]]                          # (k, size, size)
+        out[int(size)] = (cs, Mb[idx[:, :, None], idx[:, None, :]])
+    return out
+
+
+def positive_definite(Mb):
+    """True when the symmetric M̄ has a Cholesky factor, found block by block: the
+    factors of its diagonal blocks (the components), batched by size (a large block-diagonal
+    M̄ costs its blocks, not a dense factorization)."""
+    try:
+        for _, blks in _blocks_by_size(Mb, *components(Mb)).values():
+            np.linalg.cholesky(blks)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def _block_inverses(Mb, members, sizes):
+    """{size: (component indices, blocks, inverses)} of the diagonal blocks of M̄, components
+    of one size inverted in one call through their Cholesky factors; None when a block is not
+    positive definite (singular or indefinite: it then has no inverse of its own)."""
+    out = {}
+    for size, (cs, blks) in _blocks_by_size(Mb, members, sizes).items():
         d = np.sqrt(np.abs(np.diagonal(blks, axis1=1, axis2=2)).max(axis=1))
         try:
             L = np.linalg.cholesky(blks)

@@ -7,7 +7,12 @@ with the γ differences). Imported only when used (it imports numba).
 * :func:`plain_f` (model, P): the same for an unconstrained model with a constant M̄, as a
   closure with everything looked up once (forces and solve fused in ``free_rhs``);
 * :func:`solve_fallback` (P, nc, Vd): finishes a ``solve`` that returned 1 (redundant
-  constraints) by ``lgt_bridge.model.solve_schur`` from the buffers it left (:func:`buffers`).
+  constraints) by ``lgt_bridge.model.solve_schur`` from the buffers it left (:func:`buffers`);
+* :func:`pack` (model): the tables of :mod:`.kernel_tables` and, for a constrained model
+  with a constant M̄, the sparse rows (``P.sp``, :class:`SparseRows`): A in CSR and the
+  sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is a
+  spherical joint's (checked against Exudyn's Jacobian and γ's differences at the
+  analysis), else A from Exudyn's dense Jacobian gathered into the pattern.
 
 The numpy reference is ExudynModel's own f (:mod:`.layout`'s maps, :mod:`.constraints`' γ
 and ``lgt_bridge.model.solve_kkt``); tests/test_exudyn_kernels.py holds them equal (1e-13;
@@ -21,10 +26,164 @@ from lgt_bridge.model import solve_schur
 from .constraints import EPS_GAMMA
 from .kernel_maps import constraint_matrix, forces, gamma_fd, write
 from .kernel_solve import free_rhs, solve
-from .kernel_tables import OMIQ, OS, OR, OY, pack
+from .kernel_sparse import joint_rows, sparse_correction, sparse_solve
+from .kernel_tables import OMIQ, OS, OR, OY
+from .kernel_tables import pack as pack_tables
+from . import sparse
 
 __all__ = ["pack", "write", "forces", "constraint_matrix", "gamma_fd", "solve", "free_rhs", "buffers",
-           "solve_fallback", "plain_f", "f_compiled"]
+           "solve_fallback", "plain_f", "f_compiled", "joint_rows", "sparse_solve", "sparse_fallback", "SparseRows", "constraint_schur"]
+
+#: the closed-form rows are taken when they equal Exudyn's Jacobian to this (relative) and γ's
+#: differences to GAMMA_CHECK at the analysis
+JACOBIAN_CHECK, GAMMA_CHECK = 1e-10, 1e-5
+
+
+class SparseRows:
+    """A model's constraint rows in CSR (``aptr``, ``acol``; values ``aval``, rows in the
+    model's order) and the structure of :func:`.kernel_sparse.sparse_solve` (``I``, ``io``,
+    ``F``, ``fo``: :func:`.sparse.structure`). ``joints``: (J, Jf) of
+    :func:`.kernel_sparse.joint_rows` when the rows are computed in closed form, else None
+    (A from Exudyn's dense Jacobian: ``flat``, the pattern's positions in a dense nc x nv A)."""
+
+    def __init__(self, P, aptr, acol, joints):
+        self.aptr, self.acol, self.joints = aptr, acol, joints
+        self.rows = np.repeat(np.arange(len(aptr) - 1), np.diff(aptr))
+        self.flat = self.rows * P.nv + acol
+        self.aval = np.zeros(len(acol))
+        #: the last sparse_solve left λ (unique: no redundant rows) in F's LAM section
+        self.lam_ok = False
+        self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol)
+
+    def dense(self, nc, nv):
+        """A as a dense nc x nv array (from ``aval``)."""
+        A = np.zeros((nc, nv))
+        np.add.at(A, (self.rows, self.acol), self.aval)
+        return A
+
+
+def pack(model, nc_max=None, views=True):
+    """:func:`.kernel_tables.pack`, and ``P.sp``: the model's :class:`SparseRows`, or None
+    (no constraints, no constant M̄ packed, rows of unknown owners, or ``nc_max`` other than
+    the model's rows)."""
+    P = pack_tables(model, nc_max, views)
+    P.sp = None
+    cons = getattr(model, "cons", None)
+    if (cons is None or not model.n_constraints or not P.constant_mass or P.nc_max != model.n_constraints
+            or not views):
+        return P
+    joints = sparse.joint_rows(model, P)
+    if joints is not None and not _joints_agree(model, P, *joints):
+        joints = None
+    pattern = joints[2:] if joints is not None else sparse.ltg_pattern(model)
+    if pattern is None:
+        return P
+    sp = SparseRows(P, *pattern, joints=None if joints is None else joints[:2])
+    if joints is None and not _pattern_holds(model, P, sp):
+        return P
+    P.sp = sp
+    return P
+
+
+def _states(model):
+    """(q, V) at which the analysis compares: the initial state and a moved one."""
+    rng = np.random.default_rng(3)
+    q0, V0 = model.q0[:model.n2], model.V0[:model.nv]
+    V1 = rng.normal(size=model.nv)
+    return [(q0, V0), (model.nodes.moved(q0, V1, 0.3), V1)]
+
+
+def _dense_A(model, q):
+    model.sd.SetODE2Coordinates(q - model.ref)
+    return model.cons.Cq() @ model.nodes.H(q)
+
+
+def _joints_agree(model, P, J, Jf, aptr, acol):
+    """True when the closed-form rows equal Exudyn's Jacobian (C_q H) and γ its differences
+    at the analysis states; leaves the system's state as it found it."""
+    sd = model.sd
+    keep = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()), sd.GetTime())
+    nc, nv = model.n_constraints, model.nv
+    rows = np.repeat(np.arange(nc), np.diff(aptr))
+    try:
+        for q, V in _states(model):
+            aval, gam = np.zeros(len(acol)), np.zeros(nc)
+            joint_rows(P.T, np.ascontiguousarray(q, float), np.ascontiguousarray(V, float), J, Jf, aval, gam)
+            A = np.zeros((nc, nv))
+            np.add.at(A, (rows, acol), aval)
+            Ad = _dense_A(model, q)
+            if np.abs(A - Ad).max() > JACOBIAN_CHECK * max(1.0, np.abs(Ad).max()):
+                return False
+            gd = model.cons.gamma(q, V, model.t0)
+            if np.abs(gam - gd).max() > GAMMA_CHECK * max(1.0, np.abs(gd).max()):
+                return False
+        return True
+    finally:
+        sd.SetODE2Coordinates(keep[0])
+        sd.SetODE2Coordinates_t(keep[1])
+        sd.SetTime(keep[2])
+
+
+def _pattern_holds(model, P, sp):
+    """True when Exudyn's Jacobian at the analysis states is zero outside sp's pattern."""
+    sd = model.sd
+    keep = np.array(sd.GetODE2Coordinates())
+    try:
+        for q, _ in _states(model):
+            A = _dense_A(model, q)
+            A.ravel()[sp.flat] = 0.0
+            if np.abs(A).max() > 0.0:
+                return False
+        return True
+    finally:
+        sd.SetODE2Coordinates(keep)
+
+
+def sparse_values(model, P, q):
+    """A's values at q into P.sp.aval (closed form, or gathered from Exudyn's dense Jacobian;
+    the system's coordinates are then q's)."""
+    sp = P.sp
+    if sp.joints is not None:
+        joint_rows(P.T, q, np.zeros(P.nv), sp.joints[0], sp.joints[1], sp.aval, P.gam)
+    else:
+        model.sd.SetODE2Coordinates(q - model.ref)
+        E = model.engine
+        constraint_matrix(P.T, P.off, P.w, q, E.ae_jacobian_full(1.0, 1.0 if model.cons.nonholonomic else 0.0),
+                          P.rows, P.A)
+        np.take(P.A.ravel(), sp.flat, out=sp.aval)
+    return sp.aval
+
+
+def constraint_schur(model, P, q):
+    """(A, correct) of ``Model.constraint_schur`` from the sparse rows: A as a scipy CSR
+    matrix, correct(r) = M̄⁻¹Aᵀ(A M̄⁻¹ Aᵀ)⁻¹ r by :func:`.kernel_sparse.sparse_correction` (the
+    dense minimum-norm solve when rows are redundant)."""
+    from scipy.sparse import csr_matrix
+    sp, nv, nc = P.sp, P.nv, model.n_constraints
+    aval = sparse_values(model, P, np.ascontiguousarray(q, float)).copy()
+    A = csr_matrix((aval, sp.acol, sp.aptr), shape=(nc, nv))
+
+    def correct(r):
+        out = np.empty(nv)
+        r = np.ascontiguousarray(r, float)
+        if sparse_correction(P.T, P.off, P.w, sp.I, sp.io, sp.F, sp.fo, aval, r, out) == 0:
+            return out
+        Ad = A.toarray()
+        MiAt = model._solve_mass2(q, Ad.T)
+        return MiAt @ solve_schur(Ad @ MiAt, r)
+    return A, correct
+
+
+def sparse_fallback(model, P, q, gam, Vd):
+    """After sparse_solve returned 1 (redundant constraints): V̇ by lgt_bridge.model.solve_schur
+    (minimum-norm λ) on dense matrices from the sparse rows, M̄⁻¹Q̄ from the work array."""
+    sp, nv = P.sp, P.nv
+    A = sp.dense(len(gam), nv)
+    Miv = P.w[P.off[OMIQ]:P.off[OMIQ] + nv].copy()
+    MiAt = model._solve_mass2(q, A.T)
+    lam = solve_schur(A @ MiAt, A @ Miv + gam)
+    np.subtract(Miv, MiAt @ lam, out=Vd)
+    return Vd
 
 
 def buffers(P, nc):
@@ -76,7 +235,11 @@ def f_compiled(model, P, q, V, t):
     S, mbs, sd = E.solver, E.mbs, E.sd
     T, off, w, qpos, qvel = P.T, P.off, P.w, P.qpos, P.qvel
     nc = model.n_constraints
-    if nc:
+    sp = P.sp
+    if nc and sp is not None and sp.joints is not None:
+        gam = P.gam
+        joint_rows(T, q, V, sp.joints[0], sp.joints[1], sp.aval, gam)
+    elif nc:
         td = cons.time_dependent
         if (td and not cons.exudyn_gt) or not cons.velocity_level:
             gam = cons.gamma(q, V, t)                        # numpy path (second differences)
@@ -101,12 +264,20 @@ def f_compiled(model, P, q, V, t):
         M, Mbar = S.GetSystemMassMatrix(), P.Mbar
     forces(T, off, w, q, V, Q, M, P.Qbar, Mbar)
     model.n_eval += 1
+    Vd = np.empty(P.nv)
+    if sp is not None:
+        if sp.joints is None:
+            constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, P.A)
+            np.take(P.A.ravel(), sp.flat, out=sp.aval)
+        sp.lam_ok = sparse_solve(T, off, w, sp.I, sp.io, sp.F, sp.fo, sp.aval, P.Qbar, gam, Vd) == 0
+        if not sp.lam_ok:
+            sparse_fallback(model, P, q, gam, Vd)
+        return Vd
     if nc:
         A = P.A
         constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, A)
     else:
         A, gam = P.A0, P.gam0
-    Vd = np.empty(P.nv)
     flag = solve(T, off, w, Mbar, A, P.Qbar, gam, Vd)
     if flag == 1:
         solve_fallback(P, len(gam), Vd)

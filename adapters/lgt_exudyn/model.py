@@ -242,9 +242,13 @@ class ExudynModel(StepHooks, Model):
         if not self._compiled:
             return self.cons.Cq() @ self.nodes.H(q)
         P = self._pack()
+        q = np.ascontiguousarray(q, float)
+        if P.sp is not None and P.sp.joints is not None:        # closed-form rows: no Exudyn Jacobian
+            self._kernels.sparse_values(self, P, q)
+            return P.sp.dense(self.n_constraints, self.nv)
         A = np.empty((self.n_constraints, self.nv))
         C = self.engine.ae_jacobian_full(1.0, 1.0 if self.cons.nonholonomic else 0.0)
-        self._kernels.constraint_matrix(P.T, P.off, P.w, np.ascontiguousarray(q, float), C, P.rows, A)
+        self._kernels.constraint_matrix(P.T, P.off, P.w, q, C, P.rows, A)
         return A
 
     def _solve_mass2(self, q, B):
@@ -284,7 +288,7 @@ class ExudynModel(StepHooks, Model):
         return self.ode1.solve_mass(lambda b: self._solve_mass2(q[:self.n2], b), B)
 
     @engine_call
-    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos):
+    def iteration_matrix(self, q, V, t, c_acc, c_vel, c_pos, sparse=False):
         """M̄ c_acc + C_t c_vel + K_t c_pos for generalized-α's Newton matrix, in the twists V and
         the SO(3)xR³ increments z (the derivatives of R = M̄ V̇ - Q̄(q(z), V, t)), from Exudyn's
         own Jacobians of its ODE2 right-hand side Q_e (ComputeJacobianODE2RHS, loads included):
@@ -297,18 +301,25 @@ class ExudynModel(StepHooks, Model):
         body (tests/test_exudyn_iteration.py): C_t to 3e-8, K_t to 0.1 % (RotVecLG) and 4 % (EP),
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
         not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
-        for the calls at the same (q, V, t)."""
-        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes())
+        for the calls at the same (q, V, t). ``sparse``: scipy.sparse matrices (products with
+        a sparse H: large models), as generalized-α asks above its sparse size."""
+        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
         cached = getattr(self, "_it_cache", None)
         if cached is None or cached[0] != key:
             S, n2 = self.solver, self.n2
             H = self.nodes.H(np.asarray(q, float))
             Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
             self.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
-            parts = [Mbar]
+            if sparse:
+                from scipy.sparse import csr_matrix as to
+                H = to(H)
+            else:
+                def to(X):
+                    return X
+            parts = [to(Mbar)]
             for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
                 S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
-                J = np.asarray(S.GetSystemJacobian())[:n2, :n2]
+                J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
                 parts.append(-(H.T @ (J @ H)))
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
@@ -339,6 +350,15 @@ class ExudynModel(StepHooks, Model):
     def constraint_jacobian(self, q):
         A = self._jacobian2(q[:self.n2])
         return A if self.ode1 is None else self.ode1.jacobian(A)
+
+    @engine_call
+    def constraint_schur(self, q, rows=None):
+        """``Model.constraint_schur`` on the sparse rows of the compiled backend (A sparse, the
+        correction by the envelope factor of A M̄⁻¹ Aᵀ), densely otherwise."""
+        P = self._pack() if self._compiled and self.ode1 is None and self.n_constraints else None
+        if P is None or P.sp is None or (rows is not None and len(rows) != self.n_constraints):
+            return Model.constraint_schur(self, q, rows)
+        return self._kernels.constraint_schur(self, P, q[:self.n2])
 
     @engine_call
     def constraint_gamma(self, q, V, t=None):
@@ -375,16 +395,13 @@ class ExudynModel(StepHooks, Model):
     def check_mass_matrix(self, q):
         """InputError when the twist mass matrix at q is singular or indefinite (as
         ``simulate`` checks every model before the first step; the ODE2 part's: the ODE1
-        block is the identity); a constant positive definite M̄ is checked once, by a
-        Cholesky factorization, for all later runs."""
+        block is the identity); a constant positive definite M̄ is checked once, by the
+        Cholesky factors of its diagonal blocks, for all later runs."""
         from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self.Mbar is not None:
             if self._Mbar_pd is None:
-                try:
-                    np.linalg.cholesky(self.Mbar)
-                    self._Mbar_pd = True
-                except np.linalg.LinAlgError:
-                    self._Mbar_pd = False
+                from .kernel_tables import positive_definite
+                self._Mbar_pd = positive_definite(self.Mbar)
             if self._Mbar_pd:
                 return
         if self.nv > MASS_CHECK_MAX_NV:

@@ -8,12 +8,12 @@ g(q, t) of the constraints:
 Velocity, on every row (velocity-level rows included):
     V <- V - M⁻¹Aᵀ (A M⁻¹Aᵀ)⁺ (A V - b(q, t))
 with b = -∂g/∂t for time-dependent constraints (zero otherwise). ⁺ is the
-minimum-norm solve of :func:`lgt_bridge.model.solve_schur` (redundant constraints).
-The residuals before and after are kept for the result's statistics.
+minimum-norm solve of :func:`lgt_bridge.model.solve_schur` (redundant constraints); both
+steps come from the model's ``constraint_schur`` (dense by default, sparse where a model has
+sparse rows). The residuals before and after are kept for the result's statistics.
 """
 import numpy as np
 
-from ..model import solve_schur
 from .problem import make_problem
 
 
@@ -41,22 +41,19 @@ class Projector:
         g = self.model.constraints_at(q, t)
         return g if self.all_rows else g[self.rows]
 
-    def _A(self, q):
-        A = self.model.constraint_jacobian(q)
-        return A, (A if self.all_rows else A[self.rows])
+    def _schur(self, q):
+        """(Aₚ, correct) of the position rows (``Model.constraint_schur``)."""
+        return self.model.constraint_schur(q, None if self.all_rows else self.rows)
 
     def positions(self, q, t):
         """q moved onto g(q, t) = 0 (position rows); returns (q, residual before, after)."""
-        m = self.model
         g = self._g(q, t)
         before = gmax = float(np.abs(g).max()) if len(g) else 0.0
         tol = self.tol if self.tol is not None else 4 * np.finfo(float).eps * (1.0 + float(np.abs(q).max()))
         for k in range(self.max_iter):
             if not len(g) or gmax <= tol:
                 break
-            _, Ap = self._A(q)
-            MiAt = m.solve_mass(q, Ap.T)
-            d = MiAt @ solve_schur(Ap @ MiAt, g)
+            d = self._schur(q)[1](g)
             self.prob.start(q)
             q_new, _ = self.prob.configuration(self.prob.to_local(-d))
             g_new = self._g(q_new, t)
@@ -72,13 +69,12 @@ class Projector:
     def velocities(self, q, V, t):
         """V moved onto A(q) V = b(q, t); returns (V, residual after)."""
         m = self.model
-        A = m.constraint_jacobian(q)
+        A, correct = m.constraint_schur(q)
         r = A @ V
         b = m.velocity_rhs(q, t)
         if b is not None:
             r = r - b
-        MiAt = m.solve_mass(q, A.T)
-        V = V - MiAt @ solve_schur(A @ MiAt, r)
+        V = V - correct(r)
         r = A @ V - (0.0 if b is None else b)
         return V, float(np.abs(r).max())
 

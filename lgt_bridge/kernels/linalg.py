@@ -1,5 +1,6 @@
 """Compiled dense linear algebra shared by the kernels: one Cholesky factorization and its
-solve, on flat row-major n x n blocks of a float64 array (a slice of a work array).
+solve, on flat row-major n x n blocks of a float64 array (a slice of a work array), and the
+same on a packed envelope (skyline) storage for large sparse matrices (:func:`envelope_cholesky`).
 
 A symmetric positive definite S may have a row envelope ``first`` (``first[i]``: the first
 nonzero column of row i of its lower triangle, which the factor keeps); an empty ``first``
@@ -59,3 +60,49 @@ def cholesky_solve(L, n, first, x):
         xi = x[i]
         for k in range(0 if dense else first[i], i):
             x[k] -= L[n * i + k] * xi
+
+
+@njit(cache=True, error_model="numpy")
+def envelope_cholesky(S, first, start):
+    """The Cholesky factor of a symmetric positive definite matrix in packed envelope
+    storage, in place: row i of the lower triangle holds columns first[i]..i at
+    S[start[i]:start[i + 1]] (start[i + 1] = start[i] + i - first[i] + 1; n = len(first)).
+    The factor keeps the envelope; as :func:`cholesky`, 1 / L_ii on the diagonal. Memory and
+    work grow with the envelope, not with n² (a banded matrix: n times its band). Returns
+    (ok, smallest, largest L_ii); not ok when a pivot is not positive."""
+    n = first.shape[0]
+    dmin, dmax = np.inf, 0.0
+    for i in range(n):
+        fi, si = first[i], start[i] - first[i]          # S[si + j] is entry (i, j)
+        for j in range(fi, i + 1):
+            sj = start[j] - first[j]
+            s = S[si + j]
+            for k in range(max(fi, first[j]), j):
+                s -= S[si + k] * S[sj + k]
+            if j < i:
+                S[si + j] = s * S[sj + j]
+            elif s > 0.0:
+                d = math.sqrt(s)
+                dmin, dmax = min(dmin, d), max(dmax, d)
+                S[si + i] = 1.0 / d
+            else:
+                return False, 0.0, dmax
+    return True, dmin, dmax
+
+
+@njit(cache=True, error_model="numpy")
+def envelope_solve(L, first, start, x):
+    """x <- (L Lᵀ)⁻¹ x in place, L from :func:`envelope_cholesky` (same ``first``, ``start``)."""
+    n = first.shape[0]
+    for i in range(n):                      # L y = x
+        si = start[i] - first[i]
+        s = x[i]
+        for k in range(first[i], i):
+            s -= L[si + k] * x[k]
+        x[i] = s * L[si + i]
+    for i in range(n - 1, -1, -1):          # Lᵀ x = y
+        si = start[i] - first[i]
+        x[i] *= L[si + i]
+        xi = x[i]
+        for k in range(first[i], i):
+            x[k] -= L[si + k] * xi

@@ -6,7 +6,7 @@ import pytest
 
 pytest.importorskip("numba")
 
-from lgt_bridge.kernels.linalg import cholesky, cholesky_solve  # noqa: E402
+from lgt_bridge.kernels.linalg import cholesky, cholesky_solve, envelope_cholesky, envelope_solve  # noqa: E402
 
 from backend_checks import close  # noqa: E402
 
@@ -45,6 +45,33 @@ def test_envelope_factor_equals_dense(rng):
     assert cholesky(flat, n, first)[0]
     cholesky_solve(flat, n, first, x)
     assert close(x, want)
+
+
+@pytest.mark.parametrize("first", [[0, 0, 0, 1, 1, 3, 3, 5, 6], [0, 0, 1, 2, 3, 4, 5, 6, 7], list(range(9)),
+                                   [0] * 9])
+def test_packed_envelope_equals_numpy(first, rng):
+    """The packed envelope (skyline) storage: the factor equals numpy's Cholesky factor entry
+    by entry inside the envelope, and the solve numpy's solve."""
+    n, first = len(first), np.array(first, np.int64)
+    S = spd(rng, n)
+    for i in range(n):
+        S[i, :first[i]] = S[:first[i], i] = 0.0
+    S += 3 * n * np.eye(n)
+    start = np.concatenate([[0], np.cumsum(np.arange(n) - first + 1)]).astype(np.int64)
+    packed = np.concatenate([S[i, first[i]:i + 1] for i in range(n)])
+    ok, dmin, dmax = envelope_cholesky(packed, first, start)
+    L = np.linalg.cholesky(S)
+    assert ok and close(dmin, np.diag(L).min()) and close(dmax, np.diag(L).max())
+    for i in range(n):
+        row = packed[start[i]:start[i + 1]]
+        assert close(row[:-1], L[i, first[i]:i]) and close(row[-1], 1.0 / L[i, i])
+    x = rng.normal(size=n)
+    want = np.linalg.solve(S, x)
+    envelope_solve(packed, first, start, x)
+    assert close(x, want)
+    S[4, 4] = -50.0 * n
+    packed = np.concatenate([S[i, first[i]:i + 1] for i in range(n)])
+    assert not envelope_cholesky(packed, first, start)[0]
 
 
 def test_not_positive_definite_is_reported(rng):

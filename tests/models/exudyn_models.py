@@ -42,3 +42,68 @@ def mixed_with_point_mass(node=EP):
     return SC, mbs
 
 
+
+
+def _bar(mbs, a, b, node, spin=0.0, inertia_scale=1.0):
+    """A rigid bar from point a to point b (its node at the middle, its x axis along it)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    x = (b - a) / np.linalg.norm(b - a)
+    y = np.cross([0.3, 0.5, 0.8], x)
+    y /= np.linalg.norm(y)
+    R = np.column_stack([x, y, np.cross(x, y)])
+    L = np.linalg.norm(b - a)
+    inertia = RigidBodyInertia(mass=inertia_scale, inertiaTensor=np.diag([1e-3, L * L / 12, L * L / 12]) * inertia_scale)
+    return mbs.CreateRigidBody(inertia=inertia, nodeType=node, referencePosition=0.5 * (a + b),
+                               referenceRotationMatrix=R, initialAngularVelocity=[spin, 0, 0], gravity=G), L
+
+
+def _spherical(mbs, bodyA, bodyB, point, ground=None):
+    """A spherical joint as users write it with markers: MarkerBodyPosition on each side."""
+    from exudyn.utilities import ObjectJointSpherical
+    def marker(body):
+        if body is None:
+            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground[0], localPosition=list(point)))
+        o = mbs.GetObject(body)
+        n = mbs.GetNode(o["nodeNumber"])
+        ref = np.asarray(n["referenceCoordinates"], float)
+        R = np.array(mbs.GetNodeOutput(o["nodeNumber"], exu.OutputVariableType.RotationMatrix,
+                                       exu.ConfigurationType.Reference)).reshape(3, 3)
+        return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=list(R.T @ (np.asarray(point) - ref[:3]))))
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[marker(bodyA), marker(bodyB)]))
+
+
+def spherical_tree(node=EP, length=2):
+    """A tree of bars on spherical joints: a trunk hanging from the ground, three branches of
+    ``length`` bars from its lower end (bars along varied directions, varied spins)."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    trunk, _ = _bar(mbs, [0, 0, 0], [0.2, 0.1, -1.0], node, spin=1.0)
+    mbs.CreateSphericalJoint(itemNumbers=[ground, trunk], position=[0, 0, 0])
+    tip = np.array([0.2, 0.1, -1.0])
+    for k, d in enumerate(([1.0, 0.0, -0.3], [-0.5, 0.8, -0.2], [-0.4, -0.9, 0.1])):
+        d = np.asarray(d) / np.linalg.norm(d)
+        prev, a = trunk, tip
+        for j in range(length):
+            b = a + (0.7 if j == 0 else 0.5) * d + [0, 0, -0.3 * (j > 0)]
+            bar, _ = _bar(mbs, a, b, node, spin=0.5 * k - 0.7 * j)
+            mbs.CreateSphericalJoint(itemNumbers=[prev, bar], position=list(a))
+            prev, a = bar, b
+    mbs.Assemble()
+    return SC, mbs
+
+
+def spherical_loop(node=EP):
+    """A closed loop: three bars ground - b1 - b2 - b3 - ground on four spherical joints
+    (markers added by hand, as in Exudyn's own examples), not in one plane."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    P = [np.array(p, float) for p in ([0, 0, 0], [0, 1, 0], [1, 1.1, 0.5], [1.2, 0, 0])]
+    bars = [_bar(mbs, P[k], P[k + 1], node, spin=0.3 * k)[0] for k in range(3)]
+    _spherical(mbs, None, bars[0], P[0], (ground,))
+    _spherical(mbs, bars[0], bars[1], P[1])
+    _spherical(mbs, bars[1], bars[2], P[2])
+    _spherical(mbs, bars[2], None, P[3], (ground,))
+    mbs.Assemble()
+    return SC, mbs
