@@ -3,8 +3,8 @@ users write them (Exudyn's own test models and examples are the pattern), each r
 ``(mbs, simulationSettings)`` freshly assembled.
 
   2  ANCF cable and ANCF beam with damping (Exudyn's ANCFCableBeamDampingTest pattern)
-  3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a pendulum
-     copied by pickling
+  3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a crank-rocker
+     four-bar away from singular configurations, a pendulum copied by pickling
   6  a load pulse much shorter than the run (automaticStepSize's maximum step)
   9  a long chain of rigid bodies on spherical joints (genalpha's Newton test)
   10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle
@@ -113,6 +113,46 @@ def iftomm_double_fourbar(t_end=1.0, n=100):
     for a, b in ((g[0], m0[0]), (g[1], m0[2]), (g[2], m0[4]), (m1[0], m0[1]), (m1[1], m0[3]), (m1[2], m0[3]),
                  (m1[3], m1[4])):
         mbs.AddObject(RevoluteJoint2D(markerNumbers=[a, b]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n)
+
+
+def crank_rocker_fourbar(t_end=1.0, n=100, theta0=np.pi / 3, omega0=4.0):
+    """A single-loop four-bar away from any singular configuration: a Grashof crank-rocker
+    (crank a = 0.2, coupler b = 0.6, rocker c = 0.5, ground d = 0.5; s + l = 0.8 < p + q = 1.0,
+    so its four links are never in line) of three NodeRigidBody2D bars (InertiaRodX, 1 kg/m)
+    on four RevoluteJoint2D, under gravity, the crank started at theta0 with omega0 and the
+    other bars with the velocities the loop allows (a consistent start)."""
+    mbs = _system()
+    a, b, c, d = 0.2, 0.6, 0.5, 0.5
+    A, D = np.array([0.0, 0.0]), np.array([d, 0.0])
+    B = a * np.array([np.cos(theta0), np.sin(theta0)])
+    e = D - B                                   # C on both circles |C - B| = b, |C - D| = c (upper)
+    L = np.linalg.norm(e)
+    x = (b ** 2 - c ** 2 + L ** 2) / (2 * L)
+    C = B + x * e / L + np.sqrt(b ** 2 - x ** 2) * np.array([-e[1], e[0]]) / L
+    vB = omega0 * np.array([-B[1], B[0]])       # w2 x (C - B) - w3 x (C - D) = -vB
+    perp = lambda r: np.array([-r[1], r[0]])  # noqa: E731
+    w2, w3 = np.linalg.solve(np.column_stack([perp(C - B), -perp(C - D)]), -vB)
+    bars = [(A, B, omega0, np.zeros(2)), (B, C, w2, vB), (D, C, w3, np.zeros(2))]
+    ends = []
+    for p0, p1, w, v0 in bars:
+        r = p1 - p0
+        length = np.linalg.norm(r)
+        inertia = InertiaRodX(length, length)                  # 1 kg/m
+        mid = 0.5 * (p0 + p1)
+        vmid = v0 + w * perp(mid - p0)
+        nd = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[mid[0], mid[1], np.arctan2(r[1], r[0])],
+                                         initialVelocities=[vmid[0], vmid[1], w]))
+        ob = mbs.AddObject(RigidBody2D(nodeNumber=nd, physicsMass=inertia.mass,
+                                       physicsInertia=inertia.inertiaTensor[2, 2]))
+        mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=ob)), loadVector=G2))
+        ends.append([mbs.AddMarker(MarkerBodyPosition(bodyNumber=ob, localPosition=[s * 0.5 * length, 0, 0]))
+                     for s in (-1, 1)])
+    ground = mbs.AddObject(ObjectGround())
+    gA, gD = [mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[p[0], p[1], 0])) for p in (A, D)]
+    for m0, m1 in ((gA, ends[0][0]), (ends[0][1], ends[1][0]), (ends[1][1], ends[2][1]), (gD, ends[2][0])):
+        mbs.AddObject(RevoluteJoint2D(markerNumbers=[m0, m1]))
     mbs.Assemble()
     return mbs, settings(t_end, n)
 
