@@ -7,13 +7,15 @@ users write them (Exudyn's own test models and examples are the pattern), each r
      four-bar away from singular configurations, a pendulum copied by pickling
   6  a load pulse much shorter than the run (automaticStepSize's maximum step)
   9  a long chain of rigid bodies on spherical joints (genalpha's Newton test)
-  10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle
+  10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle; Coulomb
+     friction as sign(v) in a spring's user function
 """
 import exudyn as exu
 import numpy as np
 from exudyn.beams import GenerateStraightLineANCFCable2D
-from exudyn.utilities import (Cable2D, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
-                              MarkerBodyPosition, MarkerNodePosition, MarkerNodeRigid, MassPoint, NodePoint,
+from exudyn.utilities import (Cable2D, CoordinateSpringDamper, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
+                              MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, MarkerNodeRigid, MassPoint,
+                              NodePoint, NodePointGround,
                               NodePointSlope23, NodeRigidBody2D, ObjectANCFBeam, ObjectConnectorSpringDamper,
                               ObjectGround, RevoluteJoint2D, RigidBody2D)
 
@@ -202,6 +204,48 @@ def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0):
         prev = mk
     mbs.Assemble()
     return mbs, settings(t_end, steps)
+
+
+FRICTION = dict(m=1.0, k=100.0, F=1.5, x0=0.1)
+
+
+def coulomb_friction_oscillator(t_end=2.0, steps=200, v_eps=None):
+    """A mass point on a spring with Coulomb (dry) friction, written as Exudyn users write it:
+    a CoordinateSpringDamper on the x coordinate whose springForceUserFunction returns
+    k·u + F·sign(v) (a force that jumps at v = 0). Released from x0 = 0.1 at rest: the
+    amplitude falls by 2F/k = 0.03 each half period π/ω (ω = 10 rad/s), 0.1 → −0.07 → 0.04
+    → −0.01, where |k x| = 1 N < F: it sticks at x = −0.01 from t = 3π/10 on (exact).
+    ``v_eps``: regularized instead, F·tanh(v/v_eps) (smooth, and stiff for small v_eps).
+    Returns (mbs, settings, node)."""
+    p = FRICTION
+    mbs = _system()
+    nd = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0], initialCoordinates=[p["x0"], 0, 0]))
+    mbs.AddObject(MassPoint(mass=p["m"], nodeNumber=nd))
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    mx = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nd, coordinate=0))
+
+    def force(mbs, t, itemNumber, u, v, k, d, offset):
+        return k * (u - offset) + d * v + p["F"] * (np.sign(v) if v_eps is None else np.tanh(v / v_eps))
+
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, mx], stiffness=p["k"], damping=0.0,
+                                         springForceUserFunction=force))
+    mbs.Assemble()
+    return mbs, settings(t_end, steps), nd
+
+
+def coulomb_friction_exact(t):
+    """x(t) of :func:`coulomb_friction_oscillator` (the piecewise cosine, then sticking)."""
+    p = FRICTION
+    w = np.sqrt(p["k"] / p["m"])
+    d = p["F"] / p["k"]
+    x, t0 = p["x0"], 0.0
+    while abs(x) * p["k"] > p["F"]:
+        c = np.sign(x) * d                       # the centre of this half period (friction against v)
+        if t < t0 + np.pi / w:
+            return c + (x - c) * np.cos(w * (t - t0))
+        x, t0 = 2 * c - x, t0 + np.pi / w
+    return x
 
 
 def pendulum():
