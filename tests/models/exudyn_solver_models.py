@@ -3,6 +3,7 @@ users write them (Exudyn's own test models and examples are the pattern), each r
 ``(mbs, simulationSettings)`` freshly assembled.
 
   2  ANCF cable and ANCF beam with damping (Exudyn's ANCFCableBeamDampingTest pattern)
+  4  GeneralContact: spheres on a triangle floor
   3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a crank-rocker
      four-bar away from singular configurations, a pendulum copied by pickling
   6  a load pulse much shorter than the run (automaticStepSize's maximum step)
@@ -14,7 +15,8 @@ import exudyn as exu
 import numpy as np
 from exudyn.beams import GenerateStraightLineANCFCable2D
 from exudyn.utilities import (Cable2D, CoordinateSpringDamper, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
-                              MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, MarkerNodeRigid, MassPoint,
+                              MarkerBodyPosition, MarkerNodeCoordinate, MarkerBodyRigid, MarkerNodePosition, MarkerNodeRigid,
+                              MassPoint,
                               NodePoint, NodePointGround,
                               NodePointSlope23, NodeRigidBody2D, ObjectANCFBeam, ObjectConnectorSpringDamper,
                               ObjectGround, RevoluteJoint2D, RigidBody2D)
@@ -157,6 +159,33 @@ def crank_rocker_fourbar(t_end=1.0, n=100, theta0=np.pi / 3, omega0=4.0):
         mbs.AddObject(RevoluteJoint2D(markerNumbers=[m0, m1]))
     mbs.Assemble()
     return mbs, settings(t_end, n)
+
+
+# ---------------------------------------------------------------------------- item 4
+def general_contact_spheres(k=1e4, d=10.0):
+    """Two mass points (0.1 kg) as spheres (r = 0.1) of an Exudyn GeneralContact with a ground
+    floor of two triangles (AddSphereWithMarker, AddTrianglesRigidBodyBased, as
+    generalContactSpheresTest and the triangle-mesh tests write it), falling at 1 m/s under
+    gravity from 0.25 and 0.55 m: the first touches the floor at t ≈ 0.1 s and settles, the
+    second bounces. Returns (mbs, settings)."""
+    mbs = _system()
+    gc = mbs.AddGeneralContact()
+    gc.verboseMode = 0
+    for i in range(2):
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.3 * i, 0.25 + 0.3 * i, 0], initialVelocities=[0, -1, 0]))
+        mbs.AddObject(MassPoint(mass=0.1, nodeNumber=nd))
+        mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+        mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -0.981, 0]))
+        gc.AddSphereWithMarker(mk, radius=0.1, contactStiffness=k, contactDamping=d, frictionMaterialIndex=0)
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=mg, contactStiffness=k, contactDamping=d,
+                                  frictionMaterialIndex=0, pointList=[[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
+                                  triangleList=[[0, 2, 1], [0, 3, 2]])
+    gc.SetFrictionPairings(0.0 * np.eye(1))
+    gc.SetSearchTreeCellSize(numberOfCells=[4, 4, 4])
+    mbs.Assemble()
+    return mbs, settings(0.5, 500)
 
 
 # ---------------------------------------------------------------------------- item 6
