@@ -22,6 +22,7 @@ from functools import partial
 import numpy as np
 
 from . import auto as _auto
+from . import diagnosis as _diagnosis
 from . import events as _events
 from .errors import ChartDomainError, InputError, ModelError, ModelNote
 from .integrators.base import StepFailed
@@ -54,15 +55,6 @@ def _note_initial_projection(rep, t0):
         f"{rep['velocity']:.3g} (the model's own rule where it has one: Exudyn's first implicit step, "
         "Pinocchio's loop closure). Make the "
         "initial state consistent to silence this note."), stacklevel=5)
-
-
-def registry_implicit(method):
-    """True when ``method`` is an implicit method of the registry (False for unknown names)."""
-    from .integrators import registry
-    try:
-        return registry.get(method).implicit
-    except Exception:
-        return False
 
 
 class Simulation:
@@ -293,105 +285,20 @@ class Simulation:
     #: a singular value of the constraint Jacobian below this fraction of the largest (and
     #: not already at the start) marks a singular configuration
     SINGULAR_RATIO = 1e-3
-
-    def _singular_configuration(self):
-        """Why an explicit method's steps collapsed, when the cause is a singular configuration
-        of a mechanism (its constraint Jacobian A loses rank: bars in line, a linkage at a dead
-        point): the index-1 accelerations there respond to the smallest error of a stage's
-        state as 1/σ², so the explicit steps shrink with the distance to it and cannot cross.
-        None when A keeps its rank (and for unconstrained models and index-3 methods)."""
-        m, st = self.model, self.stepper
-        if not m.n_constraints or st.projector is None:
-            return None
-        try:
-            U, sv, _ = np.linalg.svd(np.asarray(m.constraint_jacobian(st.q), float))
-            sv0 = np.linalg.svd(np.asarray(m.constraint_jacobian(self._q_start), float), compute_uv=False)
-        except Exception:
-            return None
-        top, top0 = float(sv.max(initial=0.0)), float(sv0.max(initial=0.0))
-        if top == 0.0:
-            return None
-        small = np.flatnonzero(sv < self.SINGULAR_RATIO * top)
-        n0 = int((sv0 < self.SINGULAR_RATIO * top0).sum())     # redundant from the start
-        if len(small) <= n0:
-            return None
-        k = int(small[0])
-        rows = [int(i) for i in np.argsort(-np.abs(U[:, k]))[:4] if abs(U[i, k]) > 0.2]
-        own = getattr(m, "constraint_owners", None)
-        who = own(rows) if own is not None else f"constraint rows {rows}"
-        return (f"the mechanism is at a singular configuration there (the constraint Jacobian's smallest "
-                f"singular value is {sv[k]:.2g}, {sv[k] / top:.1g} of its largest; mostly {who}). Its "
-                "index-1 accelerations respond to the smallest error of a stage's state as 1/σ², so an "
-                "explicit method's steps shrink with the distance to it and cannot cross it at this "
-                "tolerance. Use method='genalpha' (index 3, as Exudyn's own solver), or loosen the "
-                "tolerances.")
-
     #: the run's step budget is checked every BUDGET_WINDOW accepted steps
     BUDGET_WINDOW = 1000
 
+    def _singular_configuration(self):
+        return _diagnosis.singular_configuration(self)
+
     def _check_affordable(self):
-        """Stop early, with the figures, a run that cannot finish within max_steps: checked
-        every BUDGET_WINDOW accepted steps, from the mean step of the last window, once it
-        has been steady (within a factor 2 of the window before: no transient that may
-        pass) and the rest of the run at that step needs more than 4x the steps max_steps
-        leaves. An explicit method that Hairer's stiffness test finds at its stability limit
-        (the stepper's ``stiff``) says so, with the step that limit allows."""
-        t_prev, t_last = self._budget_marks if hasattr(self, "_budget_marks") else (None, self._t_start)
-        self._budget_marks = (t_last, self.t)
-        if t_prev is None:
-            return
-        h_now = (self.t - t_last) / self.BUDGET_WINDOW
-        h_before = (t_last - t_prev) / self.BUDGET_WINDOW
-        if not (h_now > 0.0 and 0.5 * h_before <= h_now <= 2.0 * h_before):
-            return
-        need = int(np.ceil((self.t_end - self.t) / h_now))
-        left = self.max_steps - self.n_steps
-        if need <= 4 * left:
-            return
-        if self._singular_configuration() is not None:
-            return      # short steps from a singular configuration: the min_step check says so
-        stiff = getattr(self.stepper, "stiff", None)
-        head = (f"{self.method} cannot finish this run within max_steps = {self.max_steps}: over the last "
-                f"{2 * self.BUDGET_WINDOW} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
-                f"the run, from t = {self.t:.9g} to {self.t_end:.9g}, would need about {need:d} more steps "
-                f"({left:d} left).")
-        if stiff is not None:
-            _, h_stab, rho = stiff
-            why = (f" Its steps sit at its stability limit, h ≈ {h_stab:.3g} s (the stiffest mode's rate "
-                   f"ρ ≈ {rho:.3g} 1/s), whatever the tolerances: the model is stiff for an explicit method. "
-                   "Use method='radau5' or method='genalpha' (implicit: their steps follow the accuracy, not "
-                   "the stiffest mode).")
-        elif not registry_implicit(self.method):
-            why = (" The error control holds the step there: a fast motion (a stiff spring or contact, a "
-                   "flexible body such as an ANCF cable, sign(v) friction) it must resolve. Use method='radau5' "
-                   "or method='genalpha' when that motion need not be resolved, loosen the tolerances, or raise "
-                   "max_steps.")
-        else:
-            why = " Loosen the tolerances, or raise max_steps."
-        raise StepFailed(head + why)
+        """Stop early a run that cannot finish within max_steps (:func:`.diagnosis.unaffordable`)."""
+        why = _diagnosis.unaffordable(self)
+        if why is not None:
+            raise StepFailed(why)
 
     def _max_steps_message(self):
-        """What reaching max_steps means: the mean step so far, the steps the rest of the run
-        would need at it, and for an explicit method the likely cause (a stiff model keeps an
-        explicit method's steps at its stability limit) and what to use instead."""
-        from .integrators import registry
-        msg = f"max_steps = {self.max_steps} reached at t = {self.t:.9g}."
-        t_end = self.t_end
-        if self.n_steps and t_end is not None and self.t > self._t_start:
-            h_mean = (self.t - self._t_start) / self.n_steps
-            msg += (f" The mean step so far is {h_mean:.3g} s; the rest of the run to t = {t_end:.9g} would "
-                    f"need about {int(np.ceil((t_end - self.t) / h_mean)):d} more steps.")
-        try:
-            spec = registry.get(self.method)
-        except Exception:
-            spec = None
-        if spec is not None and not spec.implicit:
-            msg += (" If the model is stiff (a stiff spring or contact, a flexible body such as an ANCF "
-                    "cable, sign(v) friction), an explicit method's steps sit at its stability limit "
-                    "whatever the tolerances: use method='radau5' or method='genalpha'.")
-        else:
-            msg += " Raise max_steps, or loosen the tolerances (or lengthen dt)."
-        return msg
+        return _diagnosis.max_steps_message(self)
 
     def _attempt_discontinuous(self, h, post):
         """A step of a model with discontinuous states (contact, friction: the model's

@@ -180,3 +180,33 @@ def refuse_impact_models(mbs):
                 "the step sequence and lgt_bridge's steps would not converge to Exudyn's solution. Run "
                 "this model with Exudyn's own exu.SolveDynamic, or use impactModel = 0 with "
                 "contactDamping for the dissipation.")
+
+
+def general_contacts(mbs):
+    """What a failed step should say about Exudyn's GeneralContact, or "" when the system has
+    none: its contact forces switch on and off with the gaps inside each force evaluation
+    (it keeps no contact state between steps, unlike ObjectContactSphereSphere's data
+    coordinates), so the bridge runs it as a force model and does not locate the switches;
+    a step across one meets the jump of the contact damping force (at rtol = atol = 1e-10
+    dopri5's steps collapse at the first touch). Names each one with its parts."""
+    try:
+        n = int(mbs.NumberOfGeneralContacts())
+    except Exception:
+        return ""
+    parts = []
+    for i in range(n):
+        try:
+            d = mbs.GetGeneralContact(i).GetPythonObject()
+            what = [f"{int(d.get(key, 0))} {name}" for key, name in
+                    (("numberOfSpheresMarkerBased", "spheres"), ("numberOfTrigsRigidBodyBased", "triangles"),
+                     ("numberOfANCFCable2D", "ANCF cables")) if int(d.get(key, 0))]
+        except Exception:
+            what = []
+        parts.append(f"GeneralContact {i}" + (f" ({', '.join(what)})" if what else ""))
+    if not parts:
+        return ""
+    return (f" The system has {' and '.join(parts)}: its contact forces switch on and off with the gaps "
+            "inside each force evaluation (no contact state between steps, unlike ObjectContactSphereSphere), "
+            "and lgt_bridge does not locate these switches, so a step across one meets the jump of the "
+            "contact damping force. Loosen the tolerances (each switch then costs a few rejected steps), "
+            "or use method='radau5' or method='genalpha'.")

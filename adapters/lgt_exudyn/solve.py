@@ -20,6 +20,7 @@ from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
+from .hooks import general_contacts
 from .model import ExudynModel
 
 _noted = set()          # one-time notes already printed in this process
@@ -246,7 +247,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         print(f"lgt-bridge: SolveDynamic {describe(st)}: {sim.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")
     if failure:
-        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]} The system is left at t = {sim.t:.9g}.")
+        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]}{general_contacts(mbs)} The system is left "
+                        f"at t = {sim.t:.9g}.")
     if updateInitialValues:
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), exu.ConfigurationType.Initial)

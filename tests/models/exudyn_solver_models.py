@@ -3,17 +3,21 @@ users write them (Exudyn's own test models and examples are the pattern), each r
 ``(mbs, simulationSettings)`` freshly assembled.
 
   2  ANCF cable and ANCF beam with damping (Exudyn's ANCFCableBeamDampingTest pattern)
-  3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a pendulum
-     copied by pickling
+  4  GeneralContact: spheres on a triangle floor
+  3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a crank-rocker
+     four-bar away from singular configurations, a pendulum copied by pickling
   6  a load pulse much shorter than the run (automaticStepSize's maximum step)
   9  a long chain of rigid bodies on spherical joints (genalpha's Newton test)
-  10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle
+  10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle; Coulomb
+     friction as sign(v) in a spring's user function
 """
 import exudyn as exu
 import numpy as np
 from exudyn.beams import GenerateStraightLineANCFCable2D
-from exudyn.utilities import (Cable2D, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
-                              MarkerBodyPosition, MarkerNodePosition, MarkerNodeRigid, MassPoint, NodePoint,
+from exudyn.utilities import (Cable2D, CoordinateSpringDamper, InertiaRodX, LoadForceVector, LoadMassProportional, MarkerBodyMass,
+                              MarkerBodyPosition, MarkerNodeCoordinate, MarkerBodyRigid, MarkerNodePosition, MarkerNodeRigid,
+                              MassPoint,
+                              NodePoint, NodePointGround,
                               NodePointSlope23, NodeRigidBody2D, ObjectANCFBeam, ObjectConnectorSpringDamper,
                               ObjectGround, RevoluteJoint2D, RigidBody2D)
 
@@ -117,6 +121,73 @@ def iftomm_double_fourbar(t_end=1.0, n=100):
     return mbs, settings(t_end, n)
 
 
+def crank_rocker_fourbar(t_end=1.0, n=100, theta0=np.pi / 3, omega0=4.0):
+    """A single-loop four-bar away from any singular configuration: a Grashof crank-rocker
+    (crank a = 0.2, coupler b = 0.6, rocker c = 0.5, ground d = 0.5; s + l = 0.8 < p + q = 1.0,
+    so its four links are never in line) of three NodeRigidBody2D bars (InertiaRodX, 1 kg/m)
+    on four RevoluteJoint2D, under gravity, the crank started at theta0 with omega0 and the
+    other bars with the velocities the loop allows (a consistent start)."""
+    mbs = _system()
+    a, b, c, d = 0.2, 0.6, 0.5, 0.5
+    A, D = np.array([0.0, 0.0]), np.array([d, 0.0])
+    B = a * np.array([np.cos(theta0), np.sin(theta0)])
+    e = D - B                                   # C on both circles |C - B| = b, |C - D| = c (upper)
+    L = np.linalg.norm(e)
+    x = (b ** 2 - c ** 2 + L ** 2) / (2 * L)
+    C = B + x * e / L + np.sqrt(b ** 2 - x ** 2) * np.array([-e[1], e[0]]) / L
+    vB = omega0 * np.array([-B[1], B[0]])       # w2 x (C - B) - w3 x (C - D) = -vB
+    perp = lambda r: np.array([-r[1], r[0]])  # noqa: E731
+    w2, w3 = np.linalg.solve(np.column_stack([perp(C - B), -perp(C - D)]), -vB)
+    bars = [(A, B, omega0, np.zeros(2)), (B, C, w2, vB), (D, C, w3, np.zeros(2))]
+    ends = []
+    for p0, p1, w, v0 in bars:
+        r = p1 - p0
+        length = np.linalg.norm(r)
+        inertia = InertiaRodX(length, length)                  # 1 kg/m
+        mid = 0.5 * (p0 + p1)
+        vmid = v0 + w * perp(mid - p0)
+        nd = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[mid[0], mid[1], np.arctan2(r[1], r[0])],
+                                         initialVelocities=[vmid[0], vmid[1], w]))
+        ob = mbs.AddObject(RigidBody2D(nodeNumber=nd, physicsMass=inertia.mass,
+                                       physicsInertia=inertia.inertiaTensor[2, 2]))
+        mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=ob)), loadVector=G2))
+        ends.append([mbs.AddMarker(MarkerBodyPosition(bodyNumber=ob, localPosition=[s * 0.5 * length, 0, 0]))
+                     for s in (-1, 1)])
+    ground = mbs.AddObject(ObjectGround())
+    gA, gD = [mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[p[0], p[1], 0])) for p in (A, D)]
+    for m0, m1 in ((gA, ends[0][0]), (ends[0][1], ends[1][0]), (ends[1][1], ends[2][1]), (gD, ends[2][0])):
+        mbs.AddObject(RevoluteJoint2D(markerNumbers=[m0, m1]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n)
+
+
+# ---------------------------------------------------------------------------- item 4
+def general_contact_spheres(k=1e4, d=10.0):
+    """Two mass points (0.1 kg) as spheres (r = 0.1) of an Exudyn GeneralContact with a ground
+    floor of two triangles (AddSphereWithMarker, AddTrianglesRigidBodyBased, as
+    generalContactSpheresTest and the triangle-mesh tests write it), falling at 1 m/s under
+    gravity from 0.25 and 0.55 m: the first touches the floor at t ≈ 0.1 s and settles, the
+    second bounces. Returns (mbs, settings)."""
+    mbs = _system()
+    gc = mbs.AddGeneralContact()
+    gc.verboseMode = 0
+    for i in range(2):
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.3 * i, 0.25 + 0.3 * i, 0], initialVelocities=[0, -1, 0]))
+        mbs.AddObject(MassPoint(mass=0.1, nodeNumber=nd))
+        mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+        mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -0.981, 0]))
+        gc.AddSphereWithMarker(mk, radius=0.1, contactStiffness=k, contactDamping=d, frictionMaterialIndex=0)
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=mg, contactStiffness=k, contactDamping=d,
+                                  frictionMaterialIndex=0, pointList=[[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
+                                  triangleList=[[0, 2, 1], [0, 3, 2]])
+    gc.SetFrictionPairings(0.0 * np.eye(1))
+    gc.SetSearchTreeCellSize(numberOfCells=[4, 4, 4])
+    mbs.Assemble()
+    return mbs, settings(0.5, 500)
+
+
 # ---------------------------------------------------------------------------- item 6
 PULSE = dict(t_on=10.01, length=0.05, force=40.0, mass=1.0, t_end=50.0, n=1000)
 
@@ -162,6 +233,48 @@ def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0):
         prev = mk
     mbs.Assemble()
     return mbs, settings(t_end, steps)
+
+
+FRICTION = dict(m=1.0, k=100.0, F=1.5, x0=0.1)
+
+
+def coulomb_friction_oscillator(t_end=2.0, steps=200, v_eps=None):
+    """A mass point on a spring with Coulomb (dry) friction, written as Exudyn users write it:
+    a CoordinateSpringDamper on the x coordinate whose springForceUserFunction returns
+    k·u + F·sign(v) (a force that jumps at v = 0). Released from x0 = 0.1 at rest: the
+    amplitude falls by 2F/k = 0.03 each half period π/ω (ω = 10 rad/s), 0.1 → −0.07 → 0.04
+    → −0.01, where |k x| = 1 N < F: it sticks at x = −0.01 from t = 3π/10 on (exact).
+    ``v_eps``: regularized instead, F·tanh(v/v_eps) (smooth, and stiff for small v_eps).
+    Returns (mbs, settings, node)."""
+    p = FRICTION
+    mbs = _system()
+    nd = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0], initialCoordinates=[p["x0"], 0, 0]))
+    mbs.AddObject(MassPoint(mass=p["m"], nodeNumber=nd))
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    mx = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nd, coordinate=0))
+
+    def force(mbs, t, itemNumber, u, v, k, d, offset):
+        return k * (u - offset) + d * v + p["F"] * (np.sign(v) if v_eps is None else np.tanh(v / v_eps))
+
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, mx], stiffness=p["k"], damping=0.0,
+                                         springForceUserFunction=force))
+    mbs.Assemble()
+    return mbs, settings(t_end, steps), nd
+
+
+def coulomb_friction_exact(t):
+    """x(t) of :func:`coulomb_friction_oscillator` (the piecewise cosine, then sticking)."""
+    p = FRICTION
+    w = np.sqrt(p["k"] / p["m"])
+    d = p["F"] / p["k"]
+    x, t0 = p["x0"], 0.0
+    while abs(x) * p["k"] > p["F"]:
+        c = np.sign(x) * d                       # the centre of this half period (friction against v)
+        if t < t0 + np.pi / w:
+            return c + (x - c) * np.cos(w * (t - t0))
+        x, t0 = 2 * c - x, t0 + np.pi / w
+    return x
 
 
 def pendulum():
