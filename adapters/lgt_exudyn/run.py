@@ -30,7 +30,8 @@ def route_solve_dynamic(options):
         for i, (fn, te) in enumerate(zip(options.get("events", ()), st.get("t_events", ()))):
             name = getattr(fn, "__name__", type(fn).__name__)
             times = ", ".join(f"{t:.9g}" for t in te) if len(te) else "none"
-            print(f"lgt-bridge: SolveDynamic #{len(calls)} event {i} ({name}): {len(te)} crossing(s) at t = {times}")
+            print(f"lgt-bridge: SolveDynamic #{len(calls)} event {i} ({name}): {len(te)} crossing(s) "
+                  f"at t = {times}")
         if "terminal event" in st["message"]:
             print(f"lgt-bridge: SolveDynamic #{len(calls)} ended at the {st['message']}")
         return ok

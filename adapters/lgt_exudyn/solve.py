@@ -153,7 +153,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # with events the steps end on Exudyn's too, so a terminal event lies in the Exudyn step
     # in which it is found
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
-                     t0=t0, t_end=None if (prestep or events is not None) else t1, project=project, rho_inf=rho_inf,
+                     t0=t0, t_end=None if (prestep or events is not None) else t1, project=project,
+                     rho_inf=rho_inf,
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
