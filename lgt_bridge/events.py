@@ -6,12 +6,13 @@ engine stores it, V = (ω body, ṙ inertial) per body), with scipy's attributes
 
 - ``g.terminal``: False/0 (default), True (= 1) or a count n: the run ends at the n-th
   occurrence of this event, at the located time, with the model written back there (a later
-  ``Simulation.run`` continues from there and does not find that crossing again);
+  ``Simulation.run`` continues from there and does not find that crossing again; the
+  stepper restarts there, generalized-α with Ẇ from f at the event's state and its
+  auxiliary a = Ẇ + (a - Ẇ of the step's end), so the continued run keeps second order);
 - ``g.direction``: 0 (default, both), > 0 (only g going from negative to positive), < 0;
-- ``g.interp_points`` (ours, default 0): besides the step ends, g is tested at this many equally
-  spaced interior times of every step on its continuous extension, so that two crossings
-  within one step (no sign change between its ends) are found too; 0 is scipy's rule (a
-  sign change between step ends), which may miss such pairs.
+- ``g.interp_points`` (ours, default 0): g is also tested at this many equally spaced
+  interior times of every step (on its continuous extension), for g that wiggle faster than
+  the rule below sees.
 
 Detection: after every accepted step, g at the step's end against its value at the step's
 start. A crossing is a change between strict signs (an exact zero at a step's end is decided
@@ -19,6 +20,23 @@ by the next value: it is reported there when g goes on to the other side). So g 
 initial time is not an event: the first occurrence is the first time g returns to zero.
 (scipy 1.17's ``solve_ivp`` does report a zero at t0; MATLAB's ``odezero`` and Julia's
 callbacks do not.)
+
+Two crossings within one step (g leaves zero's side and comes back: no sign change between
+the step's ends, which scipy's rule misses) are found too: g's slope G'(t) at the step's end
+is a one-sided difference of g along the state's tangent there, (q, V)(t - δ) = τ(q_{k+1},
+-δ Ẋ) with Ẋ = dψ⁻¹_0(W), W - δ Ẇ, δ = 2⁻¹⁶ h, Ẇ from what the step computed anyway (the
+stages of the Runge-Kutta methods, generalized-α's unknowns; along the dense output for
+radau5 and ``scipy:<Name>``), and the end's slope is the next step's start slope. The cubic Hermite
+of G through both ends' values and slopes is then searched for interior extrema that turn
+towards zero (on the other side of zero, or nearer to it than both ends); g is evaluated
+there on the step's continuous extension, and where the cubic was so far off that the sign
+of g at its extremum is in doubt (``abs(g) < 4 abs(cubic - g)`` there), g's extremum itself is searched
+for (bounded Brent minimization to 1e-3 h, stopping at the first sign change). Each sign
+change among the tested points is then located as below. Cost per step: one g call and one
+τ evaluation (no f); the continuous extension (an f for the fixed-step methods, DOP853's
+three extra stages) only in steps with a crossing or such an extremum. The search is as
+good as the cubic: a pair of crossings closer together than the cubic can resolve, in a step
+where g has more than two extrema, can still be missed (set ``interp_points`` or ``max_step``).
 
 Location: Brent's method (:func:`scipy.optimize.brentq`) on G(t) = g(t, q(t), V(t)), with
 (q, V)(t) = τ(q_k, X(t)) and X(t), W(t) the step's continuous extension in the local
@@ -29,10 +47,10 @@ coordinates of the step's own base q_k:
 - scipy:<Name>: scipy's dense output of the macro step
   (:class:`.integrators.vector_space.ScipyDense`, computed only in runs with events);
 - euler, rkmk2, rkmk4, genalpha (and adaptive pairs run with fixed steps): a cubic Hermite
-  interpolant (:class:`HermiteStep`) of (X, W) through the step's start (X = 0, W_k) and end
-  (X_{k+1} = τ⁻¹(q_k, q_{k+1}), W_{k+1}) with their rates Ẋ = dψ⁻¹_{-X}(W) and Ẇ from the
-  model's f (one f per step, only in steps that are searched): the located time is
-  accurate to O(h⁴), or to the method's order if lower.
+  interpolant (:class:`.hermite.HermiteStep`) of (X, W) through the step's start (X = 0, W_k) and end
+  (X_{k+1} = τ⁻¹(q_k, q_{k+1}), W_{k+1}) with their rates Ẋ = dψ⁻¹_{-X}(W) and Ẇ (at the
+  start from the step's first stage, at the end from one f, only in steps that are
+  searched): the located time is accurate to O(h⁴), or to the method's order if lower.
 
 With constraints projected after each step, the interpolated states are projected too, so
 g is evaluated, and events are located, on the projected trajectory.
@@ -47,7 +65,7 @@ import math
 import numpy as np
 
 from .errors import InputError, ModelError
-from .groups import quaternion as _q
+from .hermite import HermiteStep, local_coordinates
 from .integrators.base import StepFailed
 
 _EPS = np.finfo(float).eps
@@ -93,6 +111,8 @@ class EventSpec:
             if initial:
                 raise InputError(msg + " (evaluated at the initial state, before the first step).") from exc
             raise StepFailed(msg + ". The run ends there; the result keeps every step before it.") from exc
+        if type(out) is float and math.isfinite(out):       # the common case, checked first
+            return out
         try:
             bad = isinstance(out, (bool, np.bool_, complex, np.complexfloating)) or np.size(out) != 1
             val = float(np.asarray(out).reshape(-1)[0]) if not bad else math.nan
@@ -127,76 +147,72 @@ class Terminal(Exception):
 
 
 def _sign(x):
-    return (x > 0.0) - (x < 0.0)
+    return int(x > 0.0) - int(x < 0.0)
 
 
-# --- the local coordinates of a pose: X = τ⁻¹(q_k, q) -----------------------------------------
-def local_coordinates(prob, q):
-    """X with τ(q_k, X) = q in the current step's chart (q_k: ``prob.q_k``): per body
-    ψ⁻¹(α(q_k)⁻¹ α(q)), vector coordinates q - q_k, circle angles of (c, s)·(c_k, s_k)⁻¹."""
-    qk = prob.q_k
-    X = np.zeros(prob.nX)
-    for s in prob.sets:
-        par = s.lgt.param
-        rk, r1 = qk[s.qidx], q[s.qidx]
-        pk = par._to_quat(rk[:, -par.nrot:])
-        p1 = par._to_quat(r1[:, -par.nrot:])
-        R = _q._to_matrix(_q._mul(_q._conj(pk), p1))
-        if s.rot_only:
-            X[s.xidx] = s.chart.on("SO3").psi_inv(R)
+class _Crossed(Exception):
+    """Internal: the search for g's extremum reached the other side of zero."""
+
+
+def _extrema(ga, gb, ma, mb):
+    """The interior extrema (s, p(s)), 0 < s < 1, of the cubic Hermite p of g through (ga,
+    ma = h g'(ta)) at s = 0 and (gb, mb = h g'(tb)) at s = 1 that turn towards zero: p there
+    on the other side of zero than an end, or nearer to zero than both ends."""
+    d = gb - ga
+    c2, c3 = 3.0 * d - 2.0 * ma - mb, ma + mb - 2.0 * d
+    # p'(s) = ma + 2 c2 s + 3 c3 s²
+    A, B, C = 3.0 * c3, 2.0 * c2, ma
+    if A == 0.0:
+        if B == 0.0:
+            return []
+        roots = [-C / B]
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc < 0.0:
+            return []
+        qq = -0.5 * (B + math.copysign(math.sqrt(disc), B))
+        roots = [qq / A] + ([C / qq] if qq != 0.0 else [])
+    near, sa, sb = min(abs(ga), abs(gb)), _sign(ga), _sign(gb)
+    out = []
+    for x in sorted(roots):
+        if 0.0 < x < 1.0:
+            px = ga + x * (ma + x * (c2 + x * c3))
+            sp = _sign(px)
+            if sp != sa or sp != sb or abs(px) < near:
+                out.append((x, px))
+    return out
+
+
+def _test_extrema(G, ta, h, ga, gb, extrema):
+    """The times at which g is tested at the cubic's extrema (:func:`_extrema`), g evaluated
+    there (``G(t)``, on the step's continuous extension). Where the cubic is so far off g
+    there that the sign of g at its extremum is in doubt (``abs(g) < 4 abs(p - g)``), the extremum of g
+    itself is searched for (:func:`scipy.optimize.minimize_scalar`, bounded, to 1e-3 h),
+    stopping once g changes sign."""
+    out = []
+    for k, (sx, px) in enumerate(extrema):
+        tt = ta + sx * h
+        out.append(tt)
+        val = G(tt)
+        side = _sign(val)
+        if not (side and side == _sign(ga) == _sign(gb) and abs(val) < 4.0 * abs(px - val)):
             continue
-        d = r1[:, :3] - rk[:, :3]
-        if s.se3:
-            d = _q._rotate(_q._conj(pk), d)
-        C = np.zeros((len(R), 4, 4))
-        C[:, :3, :3], C[:, :3, 3], C[:, 3, 3] = R, d, 1.0
-        X[s.xidx] = s.chart.on(s.lgt.group).psi_inv(C)
-    if len(prob.vq):
-        X[prob.vx] = q[prob.vq] - qk[prob.vq]
-    if len(prob.cv):
-        ck, c1 = qk[prob.cq], q[prob.cq]
-        X[prob.cx] = np.arctan2(c1[:, 1] * ck[:, 0] - c1[:, 0] * ck[:, 1],
-                                c1[:, 0] * ck[:, 0] + c1[:, 1] * ck[:, 1])
-    return X
+        from scipy.optimize import minimize_scalar
+        lo = extrema[k - 1][0] if k > 0 else 0.0
+        hi = extrema[k + 1][0] if k + 1 < len(extrema) else 1.0
 
-
-class HermiteStep:
-    """The continuous extension of a fixed step: the cubic Hermite interpolant of (X, W) in
-    the chart of the step's base, through (0, W0) at t0 and (X1, W1) at t1 with the rates
-    (Ẋ, Ẇ) of the local ODE at both ends, mapped through τ of the base. ``Wd0``: Ẇ at the
-    start when known (the previous step's end: W is the body-frame velocity, the same in
-    every step's chart), else one f. The end's Ẇ is kept as ``Wd1`` for the next step."""
-
-    def __init__(self, prob, base, t0, W0, t1, q1, W1, Wd0=None):
-        self.prob, self.base, self.t0, self.t1, self.h = prob, base, t0, t1, t1 - t0
-        with prob.based_at(base):
-            X1 = local_coordinates(prob, q1)
-            Xd0, Wd, _, _ = prob.rhs(np.zeros(prob.nX), W0, t0, at_start=True) if Wd0 is None else \
-                (prob.chart_scale * prob.to_local(W0), Wd0, None, None)
-            Xd1, Wd1, _, _ = prob.rhs(X1, W1, t1)
-        self.Wd1 = Wd1
-        h = self.h
-        # y(s) = y0 + s (h ẏ0) + s² (3Δ - 2h ẏ0 - h ẏ1) + s³ (h ẏ0 + h ẏ1 - 2Δ)
-        self.cX = self._coef(np.zeros(prob.nX), X1, h * Xd0, h * Xd1)
-        self.cW = self._coef(W0, W1, h * Wd, h * Wd1)
-
-    @staticmethod
-    def _coef(y0, y1, d0, d1):
-        dy = y1 - y0
-        return (y0, d0, 3.0 * dy - 2.0 * d0 - d1, d0 + d1 - 2.0 * dy)
-
-    @staticmethod
-    def _eval(c, s):
-        return c[0] + s * (c[1] + s * (c[2] + s * c[3]))
-
-    def local(self, t):
-        s = (t - self.t0) / self.h
-        return self._eval(self.cX, s), self._eval(self.cW, s)
-
-    def __call__(self, t):
-        X, W = self.local(t)
-        with self.prob.based_at(self.base) as prob:
-            return prob.state_at(X, W)
+        def toward_zero(u):
+            x = side * G(ta + u * h)
+            if x < 0.0:
+                raise _Crossed(u)
+            return x
+        try:
+            res = minimize_scalar(toward_zero, bounds=(lo, hi), method="bounded",
+                                  options=dict(xatol=1e-3, maxiter=30))
+            out.append(ta + float(res.x) * h)
+        except _Crossed as c:
+            out.append(ta + c.args[0] * h)
+    return out
 
 
 class Tracker:
@@ -227,7 +243,7 @@ class Tracker:
             for i, s in enumerate(self.specs):
                 if s.fn is fn:
                     self.sigma[i] = side
-        self.interp = max(s.interp_points for s in self.specs)
+        self.Sa = None            # g's slopes at the next step's start (carried from its end)
         self._keep = getattr(st, "keep_dense", None) is False   # dense output on request (scipy's)
         if self._keep:
             st.keep_dense = True
@@ -289,6 +305,53 @@ class Tracker:
         return projected
 
     # --- per step ------------------------------------------------------------------------------
+    #: the step of the one-sided difference that gives g's slope at a step's end, as a
+    #: fraction of the step (along the state's tangent there, or along the dense output)
+    SLOPE_STEP = 2.0 ** -16
+
+    def _tangent(self, base, W, Wd, d):
+        """(q, V) at a distance d in time along the tangent (Ẋ = dψ⁻¹_0(W), Ẇ) at X = 0 of
+        ``base`` (None: the current step's base, i.e. the last step's end)."""
+        p = self.sim.stepper.prob
+        if base is None:
+            return p.state_at(d * p.chart_scale * W[p.local_index], W + d * Wd)
+        with p.based_at(base):
+            return p.state_at(d * p.chart_scale * W[p.local_index], W + d * Wd)
+
+    def _slopes(self, t, gb):
+        """dG/dt per event at the step's end, and at its start when not carried over from the
+        previous step: a one-sided difference of g along the state's tangent, with Ẇ from the
+        step's own stages (no f); along the dense output where the method has no such rates
+        (radau5, scipy:*); else from one f at each end."""
+        st, ta = self.sim.stepper, self.ta
+        d = self.SLOPE_STEP * (t - ta)
+        rates = st.step_rates()
+        first = self.Sa is None
+        if rates is None and st.dense is not None and abs(st.dense.t0 - ta) <= 1e-9 * (t - ta):
+            dense = st.dense
+            b0, b1 = dense(t - d), dense(t)
+            Sb = [(s.value(t, *b1) - s.value(t - d, *b0)) / d for s in self.specs]
+            if first:
+                a0, a1 = dense(ta), dense(ta + d)
+                self.Sa = [(s.value(ta + d, *a1) - s.value(ta, *a0)) / d for s in self.specs]
+            return Sb
+        if rates is None:                    # a stepper without either: f at the ends
+            prob = st.prob
+            Wd_b = prob.rhs(np.zeros(prob.nX), st.W, t, at_start=True)[1]
+            Wd_a = self.Wda
+            if Wd_a is None and first:
+                with prob.based_at(self.base) as p:
+                    Wd_a = p.rhs(np.zeros(p.nX), self.Wa, ta, at_start=True)[1]
+            rates = (Wd_a, Wd_b)
+        else:
+            self.Wda = rates[0]              # exact f at the start: the Hermite step's Ẇ_0
+        qm, Vm = self._tangent(None, st.W, rates[1], -d)
+        Sb = [(gb[i] - s.value(t - d, qm, Vm)) / d for i, s in enumerate(self.specs)]
+        if first:
+            qp, Vp = self._tangent(self.base, self.Wa, rates[0], d)
+            self.Sa = [(s.value(ta + d, qp, Vp) - self.g[i]) / d for i, s in enumerate(self.specs)]
+        return Sb
+
     def check(self, t):
         """After the step to t: record the crossings in it; a terminal one moves the
         simulation to its time and raises :class:`Terminal`."""
@@ -296,45 +359,52 @@ class Tracker:
         q, V = st.q, st.V
         gb = [s.value(t, q, V) for s in self.specs]
         self._Wd_end = None
-        ta = self.ta
-        flagged = [i for i, s in enumerate(self.specs)
-                   if (sb := _sign(gb[i])) and self.sigma[i] and sb != self.sigma[i]]
+        ta, h = self.ta, t - self.ta
+        ext, cache = [], {}
+
+        def state(tt):
+            if tt == t:
+                return q, V
+            if tt == ta:
+                return self.qa, self.Va
+            if tt not in cache:
+                if not ext:
+                    ext.append(self._extension(t))
+                cache[tt] = ext[0](tt)
+            return cache[tt]
+
+        Sb = self._slopes(t, gb)
+        xtol = max(0.01 * self.tol * h, 4 * _EPS * abs(t))
         found = []
-        if flagged or self.interp:
-            ext = self._extension(t)
-            cache = {}
+        for i, s in enumerate(self.specs):
+            ga, sigma, sb = self.g[i], self.sigma[i], _sign(gb[i])
+            extrema = _extrema(ga, gb[i], h * self.Sa[i], h * Sb[i])
+            if not (extrema or s.interp_points or (sb and sigma and sb != sigma)):
+                if sb:                       # no crossing and nothing to test inside
+                    self.sigma[i] = sb
+                continue
+            # the test points of this event in the step, with g's values there: the ends, the
+            # interior extrema of g that turn towards zero, and interp_points equally spaced
+            vals = {ta: ga, t: gb[i]}
 
-            def state(tt):
-                if tt == t:
-                    return q, V
-                if tt == ta:
-                    return self.qa, self.Va
-                if tt not in cache:
-                    cache[tt] = ext(tt)
-                return cache[tt]
+            def G(tt, s=s, vals=vals):
+                if tt not in vals:
+                    vals[tt] = s.value(tt, *state(tt))
+                return vals[tt]
 
-            xtol = max(0.01 * self.tol * (t - ta), 4 * _EPS * abs(t))
-            for i, s in enumerate(self.specs):
-                # the test points of this event in the step, with g's values there
-                n = s.interp_points
-                times = [ta] + [ta + (t - ta) * k / (n + 1) for k in range(1, n + 1)] + [t]
-                vals = [self.g[i]] + [s.value(tt, *state(tt)) for tt in times[1:-1]] + [gb[i]]
-                sigma = self.sigma[i]
-                for k in range(1, len(times)):
-                    sk = _sign(vals[k])
-                    if not sk:
-                        continue
-                    if sigma and sk != sigma:
-                        if s.direction == 0 or s.direction == sk:
-                            te = self._locate(s, state, times[k - 1], times[k], vals[k - 1], vals[k], xtol)
-                            found.append((te, i, sk))
-                    sigma = sk
-                self.sigma[i] = sigma
-        else:
-            for i, x in enumerate(gb):
-                if x != 0.0:
-                    self.sigma[i] = _sign(x)
-        self.g = gb
+            _test_extrema(G, ta, h, ga, gb[i], extrema)
+            for k in range(1, s.interp_points + 1):
+                G(ta + h * k / (s.interp_points + 1))
+            for tt in sorted(vals)[1:]:
+                sk = _sign(vals[tt])
+                if not sk:
+                    continue
+                if sigma and sk != sigma and (s.direction == 0 or s.direction == sk):
+                    prev = max(x for x in vals if x < tt)
+                    found.append((self._locate(s, state, prev, tt, vals[prev], vals[tt], xtol), i, sk))
+                sigma = sk
+            self.sigma[i] = sigma
+        self.g, self.Sa = gb, Sb
         stop = None
         for te, i, side in sorted(found):
             qe, Ve = state(te)
@@ -351,7 +421,7 @@ class Tracker:
         te, i, qe, Ve, side = stop
         qe, Ve = np.array(qe, float), np.array(Ve, float)
         sim = self.sim
-        st.set_state(qe, Ve)
+        st.restart_at(qe, Ve, te)
         sim.t = te
         sim._event_resume = (te, self.specs[i].fn, side)
         sim.model.write_back(qe, Ve, te)

@@ -6,7 +6,8 @@ from contextlib import contextmanager
 def route_solve_dynamic(options):
     """While active, ``exu.SolveDynamic``, ``exudyn.solver.SolveDynamic`` and
     ``mbs.SolveDynamic`` run :func:`lgt_exudyn.SolveDynamic` with ``options``
-    (method, group, chart, rtol, atol, progress). Yields the list of per-call statistics."""
+    (method, group, chart, rtol, atol, progress, events). Yields the list of per-call
+    statistics; with events, each call also prints the crossings found."""
     import exudyn
     import exudyn.solver
 
@@ -26,6 +27,13 @@ def route_solve_dynamic(options):
         print(f"lgt-bridge: SolveDynamic #{len(calls)} ran {describe(st)}; "
               f"{st['n_steps']} steps ({st['n_rejected']} rejected), {st['n_f']} f evaluations, "
               f"{st['wall_s']:.3f} s wall")
+        for i, (fn, te) in enumerate(zip(options.get("events", ()), st.get("t_events", ()))):
+            name = getattr(fn, "__name__", type(fn).__name__)
+            times = ", ".join(f"{t:.9g}" for t in te) if len(te) else "none"
+            print(f"lgt-bridge: SolveDynamic #{len(calls)} event {i} ({name}): {len(te)} crossing(s) "
+                  f"at t = {times}")
+        if "terminal event" in st["message"]:
+            print(f"lgt-bridge: SolveDynamic #{len(calls)} ended at the {st['message']}")
         return ok
 
     routed.__doc__ = original.__doc__

@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 
+from lgt_bridge import events as _events
 from lgt_bridge.errors import InputError, LGTError, ModelNote, StepError
 from lgt_bridge.integrators import registry
 from lgt_bridge.lgt import DEFAULT_GROUP
@@ -35,7 +36,8 @@ def _note_once(key, text):
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
                  method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
-                 project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn"):
+                 project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn",
+                 events=None):
     """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
     ignored), integrated by the bridge with ``method``/``group``/``chart``.
 
@@ -84,6 +86,16 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     as a time dependence (the explicit methods follow it in position and velocity). After
     each output step the Lagrange multipliers of the state written are put into Exudyn's
     algebraic coordinates (joint force sensors read them).
+
+    ``events``: functions g(t, q, V) -> float on the bridge's model coordinates (q: the
+    :class:`ExudynModel`'s, Exudyn's total coordinates of the nodes; V: the twists), with
+    scipy's ``terminal``/``direction`` (:mod:`lgt_bridge.events`; checked before the first
+    step). The bridge's steps then end on Exudyn's steps (as with a pre-step user function),
+    so every crossing lies in the Exudyn step in which it is found. The crossings are in the
+    statistics (``t_events``, ``q_events``, ``V_events``, per event function). A terminal
+    event ends Exudyn's run at the located time: the system's state, time, accelerations
+    and multipliers are those of the event, sensors record that last time, and the
+    statistics' ``message`` names the event (``success`` True; SolveDynamic returns True).
     """
     import exudyn as exu
     if simulationSettings is None:
@@ -138,9 +150,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # once per step, before the step, with the step's end time): the bridge's steps then
     # end on Exudyn's steps instead of stepping over them with dense output
     prestep = _has_user_function(mbs, "GetPreStepUserFunction")
-    # minimumStepSize: the floor of an error-controlled step and of genalpha's step halving
+    # minimumStepSize: the floor of an error-controlled step and of genalpha's step halving;
+    # with events the steps end on Exudyn's too, so a terminal event lies in the Exudyn step
+    # in which it is found
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
-                     t0=t0, t_end=None if prestep else t1, project=project, rho_inf=rho_inf,
+                     t0=t0, t_end=None if (prestep or events is not None) else t1, project=project,
+                     rho_inf=rho_inf,
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
@@ -156,6 +171,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     first_step = sim.first_step
     bar = simulation_bar(progress, t0, t1, sim, sim.stepper, desc="SolveDynamic")
     on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
+    tracker = None if events is None else _events.Tracker(sim, events)   # checks g before a step
+    if tracker is not None:
+        on_step = tracker.hook(on_step or (lambda t, q, V: None))
+    stopped = []            # the terminal event's message
     sd = mbs.systemData
     failure = []
     wall0 = time.perf_counter()
@@ -194,6 +213,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             # and for the final state
             last = ts + h >= t1 - 1e-12 * max(1.0, abs(t1))
             model.write_outputs(q_out, V_out, ts + h, accelerations or last, multipliers or last)
+        except _events.Terminal as stop:       # the state is at the event: Exudyn's run ends there
+            stopped.append(stop.message)
+            model.write_outputs(sim.q, sim.V, sim.t, True, True)
+            solver.it.endTime = sim.t
         except (LGTError, np.linalg.LinAlgError) as exc:
             failure.append(str(exc) if not isinstance(exc, np.linalg.LinAlgError)
                            else f"a linear solve failed at t = {sim.t:.9g} ({exc}).")
@@ -225,7 +248,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               n_steps=sim.n_steps, n_f=stepper.prob.n_f,
               n_rejected=stepper.n_rejected, n_newton=stepper.n_newton,
               wall_s=time.perf_counter() - wall0, exudyn_steps=n, success=not failure,
-              message=failure[0] if failure else "reached endTime")
+              message=failure[0] if failure else stopped[0] if stopped else "reached endTime")
+    if tracker is not None:
+        st["t_events"], st["q_events"], st["V_events"] = tracker.close()
     if controlled:
         st.update(first_step=first_step, minimum_step=h_min, maximum_step=h_cap)
     if sim.initial_projection is not None:

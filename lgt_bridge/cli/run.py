@@ -80,6 +80,41 @@ def exec_script(script, args=()):
                 del sys.modules[name]
 
 
+def load_events(specs):
+    """The event functions named by ``--events`` (``FILE.py:NAME`` or ``MODULE:NAME``), each a
+    g(t, q, V) -> float with scipy's ``terminal``/``direction`` attributes (checked by the
+    solve, before its first step). InputError for a spec that does not name a callable."""
+    import importlib
+    import importlib.util
+    import os
+    out = []
+    for spec in specs or ():
+        where, sep, name = spec.rpartition(":")
+        if not sep or not where or not name:
+            raise InputError(f"run --events {spec!r}: use FILE.py:FUNCTION or MODULE:FUNCTION "
+                             "(a function g(t, q, V) -> float).")
+        try:
+            if where.endswith(".py"):
+                if not os.path.isfile(where):
+                    raise InputError(f"run --events {spec!r}: no file {where!r}.")
+                key = f"_lgt_bridge_events_{len(out)}_{os.path.splitext(os.path.basename(where))[0]}"
+                mspec = importlib.util.spec_from_file_location(key, os.path.abspath(where))
+                module = importlib.util.module_from_spec(mspec)
+                mspec.loader.exec_module(module)
+            else:
+                module = importlib.import_module(where)
+        except InputError:
+            raise
+        except Exception as exc:
+            raise InputError(f"run --events {spec!r}: importing {where!r} failed: "
+                             f"{type(exc).__name__}: {exc}") from exc
+        fn = getattr(module, name, None)
+        if not callable(fn):
+            raise InputError(f"run --events {spec!r}: {where!r} has no function {name!r}.")
+        out.append(fn)
+    return out
+
+
 def run(a):
     """Execute ``a.script`` as __main__ with every registered adapter's solver routing active."""
     import contextlib
@@ -96,6 +131,9 @@ def run(a):
         raise InputError(f"run --atol = {a.atol:g}: must be a positive number.")
     options = dict(method=a.method, group=a.group, chart=a.chart, rtol=a.rtol, atol=a.atol,
                    progress=a.progress)
+    events = load_events(getattr(a, "events", None))
+    if events:
+        options["events"] = events
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         routed = []
@@ -153,6 +191,12 @@ def add_parser(sub):
                    help=f"local chart: {charts_help()}; auto: per body (default exp)")
     r.add_argument("--rtol", type=float, default=None, help="relative tolerance (see below)")
     r.add_argument("--atol", type=float, default=None, help="absolute tolerance (see below)")
+    r.add_argument("--events", action="append", metavar="FILE.py:FUNCTION",
+                   help="an event function g(t, q, V) -> float (FILE.py:FUNCTION or MODULE:FUNCTION; "
+                   "repeat for more) for every routed solve: its zero crossings are located and "
+                   "printed; g.terminal = True ends the solve there, g.direction = -1/0/+1 as in "
+                   "scipy; q, V are the bridge's model coordinates (Exudyn's total coordinates); "
+                   "the results are in mbs.sys['lgtBridgeStats']['t_events']")
     r.add_argument("--progress", **PROGRESS)
     r.add_argument("--debug", **DEBUG)
     r.set_defaults(script_args=[])

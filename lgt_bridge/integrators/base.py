@@ -87,7 +87,12 @@ class Stepper:
     - counters: ``n_rejected``, ``n_newton``, ``n_jacobians``, and ``prob.n_f``;
     - ``projector``: the projection onto the constraints after each step, or None;
     - optionally ``keep_dense`` (False): a stepper whose dense output costs extra computes it
-      only when this is set (scipy's macro steps, for events).
+      only when this is set (scipy's macro steps, for events);
+    - ``step_rates()``: (Ẇ at the start, Ẇ at the end) of the last accepted step where the
+      step computed them anyway (stages, generalized-α's unknowns), else None (events use
+      them to see turning points of g inside a step at no cost in f);
+    - ``restart_at(q, V, t)``: continue from another state inside the last step (a terminal
+      event), forgetting what the step carried to the next one.
     """
 
     adaptive = False
@@ -119,6 +124,14 @@ class Stepper:
         self.prob.start(self.q, quats)
         self.V = np.array(V, float) if copy else V
         self.W = self.prob.group_velocity(self.V, self.prob.start_quats) if W is None else W
+
+    def step_rates(self):
+        """(Ẇ at the start, Ẇ at the end) of the last accepted step, when known without an f."""
+        return None
+
+    def restart_at(self, q, V, t):
+        """Continue from (q, V) at t, a state inside the last step (a terminal event's)."""
+        self.set_state(q, V)
 
     def snapshot(self):
         """What :meth:`restore` needs to take the last step again from its start."""

@@ -115,6 +115,27 @@ class GenAlpha(Stepper):
         self.Wd, self.a, self.lam, self._prev = snap[2:]
         self._consts = None
 
+    def step_rates(self):
+        """(Ẇ_k, Ẇ_{k+1}) of the last step: its unknowns, no f."""
+        if self._prev is None or self.Wd is None:
+            return None
+        return self._prev[1], self.Wd
+
+    def restart_at(self, q, V, t):
+        """Continue from (q, V) at t inside the last step (a terminal event): Ẇ from f
+        there (the constraint forces resolved, as at a start), and a = Ẇ + (a - Ẇ) with the
+        step end's lag a - Ẇ ≈ Δα h Ẅ kept, so the auxiliary a stays consistent
+        (a_n ≈ Ẇ(t_n + Δα h)); the predictor's history is dropped."""
+        lag = None if (self.Wd is None or self.a is None) else self.a - self.Wd
+        lam = getattr(self, "lam", None)
+        self.set_state(q, V)
+        self._prev, self._consts = None, None
+        self.start(t)
+        if lam is not None:
+            self.lam = lam                    # the Newton guess of the first step
+        if lag is not None:
+            self.a = self.a + lag
+
     def start(self, t0):
         """Initial accelerations from the index-1 solve: Ẇ_0, a_0 = Ẇ_0."""
         prob = self.prob

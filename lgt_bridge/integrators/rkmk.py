@@ -56,10 +56,21 @@ class ExplicitRK(Stepper):
         self._A, self._b, self._c = _stage_coefficients(tableau)
         self._fsal = False                     # KW[0] holds the first stage of the next step
         self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
+        self._last_KW = None                   # the stages' Ẇ of the last accepted step
+        ends = [i for i in range(tableau.stages) if self._c[i] == 1.0]
+        self._i_end = ends[-1] if ends else 0  # the stage nearest the step's end
 
     def set_state(self, q, V, W=None, quats=None, copy=True):
         super().set_state(q, V, W, quats, copy)
         self._fsal = False
+
+    def step_rates(self):
+        """(Ẇ at the start, Ẇ at the end) of the last accepted step from its stages, no f:
+        the first stage, and the last stage at c = 1 (the end point itself for the FSAL
+        pairs; RK4's and Heun's last stage, within O(h³) and O(h²) of it; Euler: the first
+        stage again). None before the first step."""
+        KW = self._last_KW
+        return None if KW is None else (KW[0].copy(), KW[self._i_end].copy())
 
     def attempt(self, t, h):
         """One step attempt (see the subclasses' ``_attempt``). On the numpy backend the
@@ -115,6 +126,7 @@ class FixedRK(ExplicitRK):
         self.check_finite(t + h, q1, V1)
         self._check_growth(t, h, W1)
         self.finish(t + h, q1, V1, W1, quats, checked=True)
+        self._last_KW = self.KW
         return True, None      # fixed step: the driver goes back to dt after a shortened landing step
 
 
@@ -237,6 +249,7 @@ class AdaptiveRK(ExplicitRK):
             self.finish(t + h, q1, V1, W1, quats)
             # the stage buffers alternate: the dense output keeps the accepted step's stages
             other = self._bufs[1] if self.KX is self._bufs[0][0] else self._bufs[0]
+            self._last_KW = self.KW
             if tab.fsal and self.projector is None:
                 other[1][0] = self.KW[i_last]
                 self._fsal = True

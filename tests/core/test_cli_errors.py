@@ -83,7 +83,7 @@ def test_run_help_documents_every_option(capsys):
     out = _help("run", capsys=capsys)
     for word in ("euler", "rkmk2", "rkmk4", "genalpha", "dopri5", "dop853", "scipy:", "SE3", "SO3xR3",
                  "exp", "cay", "auto", "--rtol", "--atol", "relativeTolerance", "absoluteTolerance",
-                 "automaticStepSize", "numberOfSteps", "--progress", "--debug"):
+                 "automaticStepSize", "numberOfSteps", "--progress", "--debug", "--events"):
         assert word in out, word
 
 
