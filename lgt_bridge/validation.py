@@ -6,6 +6,8 @@ Public for the adapters and for users who build their own loops: ``check_inputs`
 ``validate_bodies`` (every body's coordinates, batched per parameterization), and
 ``QUAT_NORM_TOL`` (how far a unit quaternion's norm may be from 1).
 """
+import math
+
 import numpy as np
 
 from ._checks import QUAT_NORM_TOL  # noqa: F401  (public here)
@@ -22,12 +24,17 @@ def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_step
     return t0, t1, q0, V0, check_t_eval(t_eval, t0, t1)
 
 
+def _finite(x):
+    """np.isfinite(x) of a scalar, without numpy's per-call cost for Python numbers."""
+    return math.isfinite(x) if type(x) in (float, int) else np.isfinite(x)
+
+
 def check_span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
         raise InputError(f"t_span: expected (t0, t_end), got {t_span!r}.") from None
-    if not (np.isfinite(t0) and np.isfinite(t1)):
+    if not (math.isfinite(t0) and math.isfinite(t1)):
         raise InputError(f"t_span: ({t0}, {t1}) must be finite.")
     if t1 <= t0:
         raise InputError(f"t_span: t_end = {t1} must be greater than t0 = {t0}; "
@@ -39,13 +46,13 @@ def check_options(method, dt, rtol, atol, max_steps):
     """The method (from the registry), its step or tolerances, max_steps; returns the
     registry's :class:`~.integrators.registry.Method`."""
     spec = _methods.get(method)
-    if dt is not None and not (np.isfinite(dt) and dt > 0):
+    if dt is not None and not (_finite(dt) and dt > 0):
         raise InputError(f"dt = {dt} must be a positive finite step size.")
     if dt is None and spec.fixed:
         raise InputError(f"method {method!r} takes fixed steps: pass dt (e.g. dt=1e-3).")
-    if not (np.isfinite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
+    if not (_finite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
         raise InputError(f"rtol = {rtol} must be zero or positive.")
-    if not (np.isfinite(atol) and atol > 0):
+    if not (_finite(atol) and atol > 0):
         raise InputError(f"atol = {atol} must be positive.")
     if not int(max_steps) > 0:
         raise InputError(f"max_steps = {max_steps} must be a positive integer.")

@@ -125,6 +125,11 @@ class LocalProblem:
         scale = a["chart_scale"] = np.ones(nX)
         for s in sets:
             scale[s.xidx if s.se3 else s.xidx[:, :3]] = s.chart.scale
+        # X's entries in V's layout (``local_index``)
+        idx = a["_local_index"] = np.empty(nX, np.int64)
+        for s in sets:
+            idx[s.xidx] = s.vidx
+        idx[a["vx"]], idx[a["cx"]] = a["vv"], a["cv"]
         return a
 
     # --- per step ---------------------------------------------------------------

@@ -43,6 +43,29 @@ def _stage_coefficients(tableau):
     return got[1:]
 
 
+def _pair_constants(tableau):
+    """(e5, e3, stiff_pair, stiff_a) of an embedded pair, made once per tableau: the error
+    weights as contiguous arrays, and for Hairer's stiffness test the last two stages when
+    both are at c = 1 (the stiffest rate seen by the step: ρ ≈ |K_j - K_i| / |y_j - y_i|)
+    with the weights of y_j - y_i (None, None without such a pair)."""
+    key = ("pair", id(tableau))
+    got = _COEFFICIENTS.get(key)
+    if got is None or got[0] is not tableau:
+        if len(_COEFFICIENTS) > 64:
+            _COEFFICIENTS.clear()
+        e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
+        e5 = np.ascontiguousarray(e5, dtype=float)
+        e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
+        ns = tableau.stages
+        c = np.asarray(tableau.c, float)
+        pair, a = ((ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None), None
+        if pair is not None:
+            i, j = pair
+            a = np.ascontiguousarray(np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j])
+        got = _COEFFICIENTS[key] = (tableau, e5, e3, pair, a)
+    return got[1:]
+
+
 class ExplicitRK(Stepper):
 
     def __init__(self, problem, tableau, projector=None):
@@ -129,23 +152,13 @@ class AdaptiveRK(ExplicitRK):
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
         self.control = PIController(*tableau.control, order=tableau.err_order)
-        e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
-        self._e5 = np.ascontiguousarray(e5, dtype=float)
-        self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
+        self._e5, self._e3, self._stiff_pair, self._stiff_a = _pair_constants(tableau)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
         self._errsums = problem.error_sums
-        # stiffness detection (Hairer's DOPRI5/DOP853 test): the last two stages, both at
-        # c = 1, give the stiffest rate seen by the step
-        ns = tableau.stages
-        c = np.asarray(tableau.c, float)
-        self._stiff_pair = (ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None
-        if self._stiff_pair is not None:
-            i, j = self._stiff_pair
-            self._stiff_a = np.ascontiguousarray(np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j])
-        self.stability_bound = self.STABILITY_BOUND.get(ns, 3.25)
+        self.stability_bound = self.STABILITY_BOUND.get(tableau.stages, 3.25)
         self._n_stiff = self._n_nonstiff = 0
         self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
 
@@ -190,14 +203,19 @@ class AdaptiveRK(ExplicitRK):
                 self.stiff = None
 
     def initial_step(self, t):
-        """The starting step (:func:`.control.initial_step`)."""
-        prob = self.prob
-
-        def rates(X, W, ts):
-            KX, KW, _, _ = prob.rhs(X, W, ts)
-            return np.concatenate([KX, KW])
-
-        return initial_step(rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order)
+        """The starting step (:func:`.control.initial_step`). Its f at the start is the
+        first step's first stage, computed as that stage (as scipy reuses its f0): the
+        first step then starts from it, one f fewer."""
+        prob, KX, KW = self.prob, self.KX, self.KW
+        try:
+            prob.stage(KX, KW, 0, self._A[0], 0.0, self.W, t, t)
+            prob.flush(KX, KW)
+        except StepFailed:            # not finite at the start: the first step reports it
+            f0 = None
+        else:
+            f0 = np.concatenate([KX[0], KW[0]])
+            self._fsal = True
+        return initial_step(prob.rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order, f0=f0)
 
     def error_norm(self, h, X1, W1):
         s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
