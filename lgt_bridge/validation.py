@@ -116,6 +116,8 @@ def validate_bodies(lay, q0):
             raise
 
 
+_EPS = float(np.finfo(float).eps)
+
 #: dense mass-matrix checks above this many velocities are skipped (memory: 8 nv² bytes)
 MASS_CHECK_MAX_NV = 2000
 
@@ -140,7 +142,7 @@ def mass_defects(M, A=None, rtol=None):
         i = int(np.flatnonzero(~np.isfinite(M).all(axis=1))[0])
         return [(i, float("nan"))]
     M = 0.5 * (M + M.T)
-    rtol = max(1e-12, 100 * n * np.finfo(float).eps) if rtol is None else rtol
+    rtol = max(1e-12, 100 * n * _EPS) if rtol is None else rtol
     d = np.diag(M).copy()
     dmax = float(np.abs(d).max())
     if dmax == 0.0:
@@ -162,9 +164,17 @@ def mass_defects(M, A=None, rtol=None):
         w, U = np.linalg.eigh(Z.T @ S @ Z)
         U = Z @ U
         return [(int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol)]
+    blocks = _diagonal_blocks(S)
+    if len(blocks) == 1:                           # one block (robots: the floating base couples all)
+        try:
+            np.linalg.cholesky(S - rtol * np.eye(n))
+            return []
+        except np.linalg.LinAlgError:
+            w, U = np.linalg.eigh(S)
+            return sorted((int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol))
     out = []
     by_size = {}
-    for idx in _diagonal_blocks(S):
+    for idx in blocks:
         by_size.setdefault(len(idx), []).append(idx)
     for group in by_size.values():                 # same-size blocks in one batched call
         I = np.array(group)

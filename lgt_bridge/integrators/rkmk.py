@@ -272,7 +272,9 @@ class DenseStep:
     extra stages are computed on the first evaluation."""
 
     def __init__(self, stepper, t, h, X1, W1):
-        self.st, self.t0, self.h = stepper, t, h
+        # the stepper's tableau and problem, not the stepper (which holds this step as its
+        # ``dense``: no reference cycle keeping a finished run alive until the collector runs)
+        self.tab, self.prob, self.t0, self.h = stepper.tab, stepper.prob, t, h
         self.t1 = t + h
         self.KX, self.KW = stepper.KX, stepper.KW
         self.W0, self.X1, self.W1 = stepper.W, X1, W1
@@ -281,7 +283,7 @@ class DenseStep:
         self._F = None
 
     def _coefficients(self):
-        tab, prob = self.st.tab, self.st.prob
+        tab, prob = self.tab, self.prob
         h, KX, KW = self.h, self.KX, self.KW
         if tab.P is not None:
             P = tab.P
@@ -317,7 +319,7 @@ class DenseStep:
             X, W = pw @ FX, self.W0 + pw @ FW
         else:
             X, W = _dop853_eval(FX, th), self.W0 + _dop853_eval(FW, th)
-        prob = self.st.prob
+        prob = self.prob
         with prob.based_at(self.base):
             return prob.state_at(X, W)
 
