@@ -69,11 +69,12 @@ def check_state(model, q0=None, V0=None):
         raise InputError(f"q0: got shape {q0.shape}, the model has {lay.nq} coordinates.")
     if V0.shape != (lay.nv,):
         raise InputError(f"V0: got shape {V0.shape}, the model has {lay.nv} velocities.")
-    for name, arr, kind in (("q0", q0, "q"), ("V0", V0, "V")):
-        if not np.isfinite(arr).all():
-            i = int(np.flatnonzero(~np.isfinite(arr))[0])
-            raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
-                             "give a finite initial state.")
+    if not math.isfinite(q0.dot(q0) + V0.dot(V0)):          # (one reduction; inf/NaN propagate)
+        for name, arr, kind in (("q0", q0, "q"), ("V0", V0, "V")):
+            if not np.isfinite(arr).all():
+                i = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
+                                 "give a finite initial state.")
     # the bodies' coordinates and the mass matrix at q0: checked once per model and q0 (a
     # model's structure does not change; repeated runs from one state skip the checks)
     memo = getattr(model, "__dict__", {})

@@ -44,10 +44,11 @@ def _stage_coefficients(tableau):
 
 
 def _pair_constants(tableau):
-    """(e5, e3, stiff_pair, stiff_a) of an embedded pair, made once per tableau: the error
-    weights as contiguous arrays, and for Hairer's stiffness test the last two stages when
-    both are at c = 1 (the stiffest rate seen by the step: ρ ≈ |K_j - K_i| / |y_j - y_i|)
-    with the weights of y_j - y_i (None, None without such a pair)."""
+    """(e5, e3, stiff_pair, stiff_d, stiff_a) of an embedded pair, made once per tableau: the
+    error weights as contiguous arrays, and for Hairer's stiffness test the last two stages
+    (i, j) when both are at c = 1 (the stiffest rate seen by the step: ρ ≈ |K_j - K_i| /
+    |y_j - y_i|) with the weights of K_j - K_i and of (y_j - y_i)/h over the stages (None
+    without such a pair)."""
     key = ("pair", id(tableau))
     got = _COEFFICIENTS.get(key)
     if got is None or got[0] is not tableau:
@@ -58,11 +59,13 @@ def _pair_constants(tableau):
         e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
         ns = tableau.stages
         c = np.asarray(tableau.c, float)
-        pair, a = ((ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None), None
+        pair, d, a = ((ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None), None, None
         if pair is not None:
             i, j = pair
-            a = np.ascontiguousarray(np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j])
-        got = _COEFFICIENTS[key] = (tableau, e5, e3, pair, a)
+            d, a = np.zeros(ns), np.zeros(ns)
+            d[j], d[i] = 1.0, -1.0
+            a[:j] = np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j]
+        got = _COEFFICIENTS[key] = (tableau, e5, e3, pair, d, a)
     return got[1:]
 
 
@@ -152,7 +155,7 @@ class AdaptiveRK(ExplicitRK):
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
         self.control = PIController(*tableau.control, order=tableau.err_order)
-        self._e5, self._e3, self._stiff_pair, self._stiff_a = _pair_constants(tableau)
+        self._e5, self._e3, self._stiff_pair, self._stiff_d, self._stiff_a = _pair_constants(tableau)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
@@ -174,11 +177,11 @@ class AdaptiveRK(ExplicitRK):
         if self._stiff_pair is None:
             return None
         i, j = self._stiff_pair
-        KX, KW, a = self.KX, self.KW, self._stiff_a
-        dX, dW = KX[j] - KX[i], KW[j] - KW[i]
-        yX, yW = h * (a @ KX[:j]), h * (a @ KW[:j])
-        den = float(yX.dot(yX) + yW.dot(yW))
-        num = float(dX.dot(dX) + dW.dot(dW))
+        # |K_j - K_i|² and |Σ a_k K_k|² (y_j - y_i = h Σ a_k K_k) as the error sums of the
+        # weights e_j - e_i and a with unit scale: one call on the compiled backend
+        KX, KW = self.KX, self.KW
+        num, den = self._errsums(KX, KW, self._stiff_d, self._stiff_a, KX[0], KW[0], KW[0], 0.0, 1.0)
+        den *= h * h
         if not den > 0.0 or not math.isfinite(num):
             return None
         return math.sqrt(num / den)
@@ -220,10 +223,10 @@ class AdaptiveRK(ExplicitRK):
     def error_norm(self, h, X1, W1):
         s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
         if self.tab.e3 is None:
-            return abs(h) * np.sqrt(s5 / self._n)
+            return abs(h) * math.sqrt(s5 / self._n)
         if s5 == 0.0 and s3 == 0.0:
             return 0.0
-        return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * self._n)
+        return abs(h) * s5 / math.sqrt((s5 + 0.01 * s3) * self._n)
 
     def _attempt(self, t, h):
         tab = self.tab
@@ -243,7 +246,7 @@ class AdaptiveRK(ExplicitRK):
             self.control.rejected()
             return False, 0.25 * h
         en = self.error_norm(h, X1, W1)
-        if not np.isfinite(en):
+        if not math.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
         if en <= 1.0:
