@@ -86,14 +86,18 @@ class Progress:
         self.bar.start_t = self.bar._time() - (time.perf_counter() - self.start)
 
     def close(self):
-        """Final redraw and close (a bar in the default mode that never appeared stays away)."""
-        if self.mode is None:
+        """Final redraw and close (a bar in the default mode that never appeared stays away).
+        The bar lets go of ``state`` (a closure that may refer to the bar and the run: no
+        reference cycle outlives the run)."""
+        if self.mode is None or self.state is None:       # (None: closed already)
+            self.state = None
             return
         if self.bar is None and self.mode == "on":
             self._open()
         if self.bar is not None:
             self._check(force=True)
             self.bar.close()
+        self.state = None
 
 
 def _nothing():

@@ -6,6 +6,8 @@ Public for the adapters and for users who build their own loops: ``check_inputs`
 ``validate_bodies`` (every body's coordinates, batched per parameterization), and
 ``QUAT_NORM_TOL`` (how far a unit quaternion's norm may be from 1).
 """
+import math
+
 import numpy as np
 
 from ._checks import QUAT_NORM_TOL  # noqa: F401  (public here)
@@ -22,12 +24,17 @@ def check_inputs(model, t_span, method, dt, rtol, atol, q0, V0, t_eval, max_step
     return t0, t1, q0, V0, check_t_eval(t_eval, t0, t1)
 
 
+def _finite(x):
+    """np.isfinite(x) of a scalar, without numpy's per-call cost for Python numbers."""
+    return math.isfinite(x) if type(x) in (float, int) else np.isfinite(x)
+
+
 def check_span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
         raise InputError(f"t_span: expected (t0, t_end), got {t_span!r}.") from None
-    if not (np.isfinite(t0) and np.isfinite(t1)):
+    if not (math.isfinite(t0) and math.isfinite(t1)):
         raise InputError(f"t_span: ({t0}, {t1}) must be finite.")
     if t1 <= t0:
         raise InputError(f"t_span: t_end = {t1} must be greater than t0 = {t0}; "
@@ -39,13 +46,13 @@ def check_options(method, dt, rtol, atol, max_steps):
     """The method (from the registry), its step or tolerances, max_steps; returns the
     registry's :class:`~.integrators.registry.Method`."""
     spec = _methods.get(method)
-    if dt is not None and not (np.isfinite(dt) and dt > 0):
+    if dt is not None and not (_finite(dt) and dt > 0):
         raise InputError(f"dt = {dt} must be a positive finite step size.")
     if dt is None and spec.fixed:
         raise InputError(f"method {method!r} takes fixed steps: pass dt (e.g. dt=1e-3).")
-    if not (np.isfinite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
+    if not (_finite(rtol) and rtol >= 0):       # rtol = 0: pure absolute tolerance
         raise InputError(f"rtol = {rtol} must be zero or positive.")
-    if not (np.isfinite(atol) and atol > 0):
+    if not (_finite(atol) and atol > 0):
         raise InputError(f"atol = {atol} must be positive.")
     if not int(max_steps) > 0:
         raise InputError(f"max_steps = {max_steps} must be a positive integer.")
@@ -62,11 +69,12 @@ def check_state(model, q0=None, V0=None):
         raise InputError(f"q0: got shape {q0.shape}, the model has {lay.nq} coordinates.")
     if V0.shape != (lay.nv,):
         raise InputError(f"V0: got shape {V0.shape}, the model has {lay.nv} velocities.")
-    for name, arr, kind in (("q0", q0, "q"), ("V0", V0, "V")):
-        if not np.isfinite(arr).all():
-            i = int(np.flatnonzero(~np.isfinite(arr))[0])
-            raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
-                             "give a finite initial state.")
+    if not math.isfinite(q0.dot(q0) + V0.dot(V0)):          # (one reduction; inf/NaN propagate)
+        for name, arr, kind in (("q0", q0, "q"), ("V0", V0, "V")):
+            if not np.isfinite(arr).all():
+                i = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
+                                 "give a finite initial state.")
     # the bodies' coordinates and the mass matrix at q0: checked once per model and q0 (a
     # model's structure does not change; repeated runs from one state skip the checks)
     memo = getattr(model, "__dict__", {})
@@ -109,6 +117,8 @@ def validate_bodies(lay, q0):
             raise
 
 
+_EPS = float(np.finfo(float).eps)
+
 #: dense mass-matrix checks above this many velocities are skipped (memory: 8 nv² bytes)
 MASS_CHECK_MAX_NV = 2000
 
@@ -133,7 +143,7 @@ def mass_defects(M, A=None, rtol=None):
         i = int(np.flatnonzero(~np.isfinite(M).all(axis=1))[0])
         return [(i, float("nan"))]
     M = 0.5 * (M + M.T)
-    rtol = max(1e-12, 100 * n * np.finfo(float).eps) if rtol is None else rtol
+    rtol = max(1e-12, 100 * n * _EPS) if rtol is None else rtol
     d = np.diag(M).copy()
     dmax = float(np.abs(d).max())
     if dmax == 0.0:
@@ -155,9 +165,17 @@ def mass_defects(M, A=None, rtol=None):
         w, U = np.linalg.eigh(Z.T @ S @ Z)
         U = Z @ U
         return [(int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol)]
+    blocks = _diagonal_blocks(S)
+    if len(blocks) == 1:                           # one block (robots: the floating base couples all)
+        try:
+            np.linalg.cholesky(S - rtol * np.eye(n))
+            return []
+        except np.linalg.LinAlgError:
+            w, U = np.linalg.eigh(S)
+            return sorted((int(np.argmax(np.abs(U[:, k]))), float(w[k])) for k in np.flatnonzero(w <= rtol))
     out = []
     by_size = {}
-    for idx in _diagonal_blocks(S):
+    for idx in blocks:
         by_size.setdefault(len(idx), []).append(idx)
     for group in by_size.values():                 # same-size blocks in one batched call
         I = np.array(group)

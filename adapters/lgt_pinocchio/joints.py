@@ -19,6 +19,8 @@ With v = T(q) V: :meth:`Joints.v_from_twist`, :meth:`Joints.twist_from_v`, :meth
 :meth:`Joints.times_T` (G T without forming T), :meth:`Joints.TdV` (Ṫ V, Pinocchio's
 acceleration at V̇ = 0) and :meth:`Joints.vdot_from_a` (Pinocchio's a -> V̇).
 """
+from functools import lru_cache
+
 import numpy as np
 
 from lgt_bridge import lgt, params
@@ -63,9 +65,10 @@ def _simple_joint(name, iq, iv, nq, nv):
         nq == nv and name not in NOT_YET and name not in _BODY_JOINTS)
 
 
-def _parts(model, j):
-    """[(name, iq, iv, nq, nv)] of joint j: the joint itself, or a composite's components."""
-    jm = model.joints[j]
+def _parts(model, j, jm=None):
+    """[(name, iq, iv, nq, nv)] of joint j (``jm``: model.joints[j], when at hand): the joint
+    itself, or a composite's components."""
+    jm = model.joints[j] if jm is None else jm
     name, iq, iv = jm.shortname(), jm.idx_q, jm.idx_v
     if name != "JointModelComposite":
         return [(name, iq, iv, jm.nq, jm.nv)]
@@ -92,6 +95,15 @@ def _unsupported(model, j, name):
                       "Integrate this model with Pinocchio's own loop, or replace the joint.")
 
 
+@lru_cache(maxsize=None)
+def _mover(kind):
+    """The τ that moves a free-flyer ("move"), spherical ("ball") or spherical-ZYX ("zyx") joint's q
+    by a twist increment (SO(3)xR³, exp chart)."""
+    if kind == "move":
+        return lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")
+    return lgt.RotationLGT(params.QUAT_XYZW if kind == "ball" else params.RZYX, "exp")
+
+
 class Joints:
     """The joints of a ``pinocchio.Model`` in the bridge's terms: ``layout``, and the (iq, iv)
     of its free-flyer ``roots``, spherical ``balls``, ``planars`` and spherical-``zyx`` joints
@@ -102,8 +114,10 @@ class Joints:
         self.model = model
         bodies, vq, vv, cq, cv = [], [], [], [], []
         self.roots, self.balls, self.planars, self.zyx = [], [], [], []
-        for j in range(1, model.njoints):
-            parts = _parts(model, j)
+        for j, jm in enumerate(model.joints):      # (iterating: model.joints[j] copies the joint each time)
+            if j == 0:
+                continue
+            parts = _parts(model, j, jm)
             if all(_simple_joint(*p) for p in parts):
                 for cname, ciq, civ, cnq, cnv in parts:
                     if cname in CIRCLE_JOINTS:
@@ -144,9 +158,11 @@ class Joints:
         self._riv = np.array([r[1] for r in self.roots], int)
         #: True when V and v differ somewhere (free-flyers, planar or spherical-ZYX joints)
         self.convert = bool(self.roots or self.planars or self.zyx)
-        self._move = lgt.LGT(params.QUAT_XYZW, "SO3xR3", "exp")     # q moved by a twist increment
-        self._move_ball = lgt.RotationLGT(params.QUAT_XYZW, "exp")
-        self._move_zyx = lgt.RotationLGT(params.RZYX, "exp")
+
+    # q moved by a twist increment (made on first use, shared: τ objects hold no state)
+    _move = property(lambda self: _mover("move"))
+    _move_ball = property(lambda self: _mover("ball"))
+    _move_zyx = property(lambda self: _mover("zyx"))
 
     def joint_of(self, kind, index):
         """The joint that owns entry ``index`` of q (kind 'q') or of v / V (kind 'v'), for messages:

@@ -20,6 +20,7 @@ numba, f converts V to Pinocchio's v and ABA's a to V̇ by two compiled calls
 (:mod:`.kernels`) over a preallocated v; with numpy it runs the readable reference.
 """
 import warnings
+from functools import lru_cache
 
 import numpy as np
 
@@ -49,6 +50,12 @@ BRANCH_JUMP_TOL = 1e-3
 
 #: the oldest Pinocchio the adapter runs on (tested: 3.3.1, 3.9.0, 4.1.0)
 MIN_PIN = (3, 0)
+
+
+@lru_cache(maxsize=16)
+def _upper(n):
+    """The n x n upper triangle (with the diagonal) as a boolean mask, made once per size."""
+    return np.triu(np.ones((n, n), bool))
 
 
 def _check_pin_version(pin):
@@ -356,7 +363,7 @@ class PinocchioModel(Model):
     def _crba(self, q):
         """Pinocchio's joint-space mass matrix at q (CRBA fills the upper triangle only)."""
         M = self.pin.crba(self.model, self.data, q)
-        return np.triu(M) + np.triu(M, 1).T
+        return np.where(_upper(len(M)), M, M.T)
 
     def forces(self, q, V, t):
         """Q̄ with M̄ V̇ = Q̄ (+ constraint forces): Tᵀ (τ - rnea(q, v, 0, fext) - M Ṫ V), where

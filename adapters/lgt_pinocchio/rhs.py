@@ -6,11 +6,14 @@
   look-ups per call) around two kernel calls (:mod:`lgt_pinocchio.kernels`) over the model's
   preallocated work array.
 """
+from collections import namedtuple
+
 import numpy as np
 
 from lgt_bridge.errors import InputError
 
 _F64 = np.dtype(np.float64)
+_Sizes = namedtuple("_Sizes", "nq nv")
 
 
 def check_sizes(m, q, V):
@@ -44,6 +47,9 @@ def build_f(m, kernels):
     V̇)."""
     v_from_twist, vdot_from_a = kernels.v_from_twist, kernels.vdot_from_a_unchecked
     pin, model, data = m.pin, m.model, m.data
+    # the closure holds no reference to m (it becomes m.f: a cycle would keep m and its
+    # Pinocchio Data alive until the garbage collector runs, models built per call piling up)
+    sizes = _Sizes(m.nq, m.nv)
     jt, W = m._jt, m._kW
     v_buf = W[m._kv]
     has_roots = m.joints.convert
@@ -78,7 +84,7 @@ def build_f(m, kernels):
                 v_from_twist(q, V, jt, W)
             except (TypeError, ValueError):        # not float64 C-contiguous, or the wrong size
                 q, V = contiguous(q, dtype=F64), contiguous(V, dtype=F64)
-                check_sizes(m, q, V)
+                check_sizes(sizes, q, V)
                 v_from_twist(q, V, jt, W)
             v = v_buf
         else:
@@ -87,7 +93,7 @@ def build_f(m, kernels):
             if type(V) is not ndarray or V.dtype is not F64:
                 V = contiguous(V, dtype=F64)
             if V.shape != nv_shape:
-                check_sizes(m, q, V)
+                check_sizes(sizes, q, V)
             v = V                                  # the same in both coordinates
         tau = tau_c
         if tau_call:

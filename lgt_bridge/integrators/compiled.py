@@ -26,23 +26,21 @@ class CompiledProblem(LocalProblem):
 
     def __init__(self, model, group="SE3", chart="exp"):
         super().__init__(model, group, chart)
-        size = self.work_size
-        self.work = np.zeros(size)
-        (self._X, self._W, self._q, self._V, self._W0, self._qk, self._pk,
-         self._p) = _k.views(self.work, self.off)
+        self.work = w = np.zeros(self.work_size)
+        # the work array's views (as kernels.stage.views), sliced here: a call's set-up is
+        # part of every call
+        self._X, self._W, self._q, self._V, self._W0, self._qk, self._xd = [w[i:j] for i, j in self._slices]
+        self._pk, self._p = [w[i:j].reshape(-1, 4) for i, j in self._quat_slices]
         self._Xd = np.zeros(self.nX)
-        self._one = np.ones(1)
-        self._zK = np.zeros((2, max(self.nX, self.nv)))
         self._W0_src = None            # the array last copied into the W0 slot
         self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
         self._pending = None           # (i, t, ts) of that stage
-        self._xd = self.work[self.off[_k.OXD]:self.off[_k.OXD] + self.nX]     # the scratch Ẋ
-        self._zv, self._zx = np.zeros(self.nv), np.zeros(self.nX)     # (rates: no affine part)
 
     @staticmethod
     def analyze(model, group, chart):
         """The reference problem's analysis and the kernels' tables: the body table, the
-        vector/circle table ``vt`` and the work array's layout."""
+        vector/circle table ``vt``, the work array's layout, and the constant inputs of the
+        kernels (read only, shared by the problems of the model)."""
         a = LocalProblem.analyze(model, group, chart)
         a["bt"] = _k.body_table(a["sets"], PARAM_CODES)
         # rows (iq, iv, ix, iq_sin): iq_sin = -1 for a vector coordinate, else the sin entry
@@ -50,7 +48,15 @@ class CompiledProblem(LocalProblem):
         vec = np.stack([a["vq"], a["vv"], a["vx"], np.full(len(a["vq"]), -1)], axis=1)
         circ = np.stack([a["cq"][:, 0], a["cv"], a["cx"], a["cq"][:, 1]], axis=1)
         a["vt"] = np.ascontiguousarray(np.concatenate([vec.reshape(-1, 4), circ.reshape(-1, 4)]), np.int64)
-        a["off"], a["work_size"] = _k.work_layout(a["nX"], a["nv"], model.layout.nq, len(a["bt"]))
+        nX, nv, nq, nb = a["nX"], a["nv"], model.layout.nq, len(a["bt"])
+        a["off"], a["work_size"] = _k.work_layout(nX, nv, nq, nb)
+        off = [int(o) for o in a["off"]]
+        a["_slices"] = [(off[k], off[k] + n) for k, n in ((_k.OX, nX), (_k.OW, nv), (_k.OQ, nq), (_k.OV, nv),
+                                                          (_k.OW0, nv), (_k.OQK, nq), (_k.OXD, nX))]
+        a["_quat_slices"] = [(off[k], off[k] + 4 * nb) for k in (_k.OPK, _k.OP)]
+        a["_one"] = np.ones(1)
+        a["_zK"] = np.zeros((2, max(nX, nv)))
+        a["_zv"], a["_zx"] = np.zeros(nv), np.zeros(nX)     # (rates: no affine part)
         return a
 
     # --- per step ---------------------------------------------------------------

@@ -49,16 +49,40 @@ class BodySet:
 
 
 def analysis(model, group, chart, analyze):
-    """``analyze(model, group, chart)``, computed once per model and (group, chart) and
-    kept on the model (its layout does not change): repeated runs of one model skip it."""
+    """``analyze(model, group, chart)``, computed once per layout and (group, chart): kept
+    on the model with the layout it was made for (repeated runs of one model skip it; a
+    model given a new layout is analyzed again), and shared by models of equal layouts (a
+    model built afresh for each call, as a new PinocchioModel per run of one robot, finds
+    it there). ``analyze`` must read nothing of the model but its layout."""
     key = (analyze.__qualname__, _key(group), _key(chart))
-    cache = getattr(model, "__dict__", None)
-    if cache is None:
-        return analyze(model, group, chart)
-    cache = cache.setdefault("_lgt_analysis", {})
-    if key not in cache:
-        cache[key] = analyze(model, group, chart)
-    return cache[key]
+    lay = model.layout
+    memo = getattr(model, "__dict__", None)
+    if memo is not None:
+        got = memo.get("_lgt_analysis", {}).get(key)
+        if got is not None and got[0] is lay:
+            return got[1]
+    shared = key + (_layout_key(lay),)
+    a = _SHARED.get(shared)
+    if a is None:
+        a = analyze(model, group, chart)
+        if len(_SHARED) >= _SHARED_MAX:
+            _SHARED.pop(next(iter(_SHARED)))
+        _SHARED[shared] = a
+    if memo is not None:
+        memo.setdefault("_lgt_analysis", {})[key] = (lay, a)
+    return a
+
+
+#: analyses by layout content, shared by models of equal layouts (oldest dropped first)
+_SHARED = {}
+_SHARED_MAX = 32
+
+
+def _layout_key(lay):
+    """What an analysis depends on: the layout's bodies (parameterization and indices),
+    vector and circle coordinates."""
+    return (lay.nq, lay.nv, tuple((b.param.name, b.pos, b.rot, b.twist) for b in lay.bodies),
+            lay.vector_q, lay.vector_v, lay.circle_q, lay.circle_v)
 
 
 def _key(option):
@@ -125,6 +149,11 @@ class LocalProblem:
         scale = a["chart_scale"] = np.ones(nX)
         for s in sets:
             scale[s.xidx if s.se3 else s.xidx[:, :3]] = s.chart.scale
+        # X's entries in V's layout (``local_index``)
+        idx = a["_local_index"] = np.empty(nX, np.int64)
+        for s in sets:
+            idx[s.xidx] = s.vidx
+        idx[a["vx"]], idx[a["cx"]] = a["vv"], a["cv"]
         return a
 
     # --- per step ---------------------------------------------------------------

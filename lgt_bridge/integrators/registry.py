@@ -61,12 +61,17 @@ class Method:
               newton_tol=1e-10, fixed_steps=False):
         """The stepper of this method on ``problem``. ``fixed_steps``: an adaptive pair with
         a fixed form runs fixed steps of its own tableau."""
-        module, fn = self.builder.split(":")
-        build = getattr(import_module(f"{__package__}.{module}"), fn)
+        build = _BUILDERS.get(self.builder)
+        if build is None:
+            module, fn = self.builder.split(":")
+            build = _BUILDERS[self.builder] = getattr(import_module(f"{__package__}.{module}"), fn)
         return build(self, problem, dict(dt=dt, rtol=rtol, atol=atol, projector=projector,
                                          rho_inf=rho_inf, newton_tol=newton_tol,
                                          fixed_steps=fixed_steps))
 
+
+#: "module:function" -> the builder, imported on first use
+_BUILDERS = {}
 
 _TABLE = (
     Method("euler", "rkmk:build", "fixed", 1, "Lie–Euler (RKMK of order 1)"),

@@ -43,6 +43,32 @@ def _stage_coefficients(tableau):
     return got[1:]
 
 
+def _pair_constants(tableau):
+    """(e5, e3, stiff_pair, stiff_d, stiff_a) of an embedded pair, made once per tableau: the
+    error weights as contiguous arrays, and for Hairer's stiffness test the last two stages
+    (i, j) when both are at c = 1 (the stiffest rate seen by the step: ρ ≈ |K_j - K_i| /
+    |y_j - y_i|) with the weights of K_j - K_i and of (y_j - y_i)/h over the stages (None
+    without such a pair)."""
+    key = ("pair", id(tableau))
+    got = _COEFFICIENTS.get(key)
+    if got is None or got[0] is not tableau:
+        if len(_COEFFICIENTS) > 64:
+            _COEFFICIENTS.clear()
+        e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
+        e5 = np.ascontiguousarray(e5, dtype=float)
+        e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
+        ns = tableau.stages
+        c = np.asarray(tableau.c, float)
+        pair, d, a = ((ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None), None, None
+        if pair is not None:
+            i, j = pair
+            d, a = np.zeros(ns), np.zeros(ns)
+            d[j], d[i] = 1.0, -1.0
+            a[:j] = np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j]
+        got = _COEFFICIENTS[key] = (tableau, e5, e3, pair, d, a)
+    return got[1:]
+
+
 class ExplicitRK(Stepper):
 
     def __init__(self, problem, tableau, projector=None):
@@ -141,23 +167,13 @@ class AdaptiveRK(ExplicitRK):
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
         self.control = PIController(*tableau.control, order=tableau.err_order)
-        e5 = tableau.e5 if tableau.e5 is not None else tableau.b - tableau.b_err
-        self._e5 = np.ascontiguousarray(e5, dtype=float)
-        self._e3 = np.ascontiguousarray(tableau.e3 if tableau.e3 is not None else np.zeros_like(e5), dtype=float)
+        self._e5, self._e3, self._stiff_pair, self._stiff_d, self._stiff_a = _pair_constants(tableau)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
         self._errsums = problem.error_sums
-        # stiffness detection (Hairer's DOPRI5/DOP853 test): the last two stages, both at
-        # c = 1, give the stiffest rate seen by the step
-        ns = tableau.stages
-        c = np.asarray(tableau.c, float)
-        self._stiff_pair = (ns - 2, ns - 1) if ns >= 2 and c[ns - 2] == 1.0 == c[ns - 1] else None
-        if self._stiff_pair is not None:
-            i, j = self._stiff_pair
-            self._stiff_a = np.ascontiguousarray(np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j])
-        self.stability_bound = self.STABILITY_BOUND.get(ns, 3.25)
+        self.stability_bound = self.STABILITY_BOUND.get(tableau.stages, 3.25)
         self._n_stiff = self._n_nonstiff = 0
         self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
 
@@ -173,11 +189,11 @@ class AdaptiveRK(ExplicitRK):
         if self._stiff_pair is None:
             return None
         i, j = self._stiff_pair
-        KX, KW, a = self.KX, self.KW, self._stiff_a
-        dX, dW = KX[j] - KX[i], KW[j] - KW[i]
-        yX, yW = h * (a @ KX[:j]), h * (a @ KW[:j])
-        den = float(yX.dot(yX) + yW.dot(yW))
-        num = float(dX.dot(dX) + dW.dot(dW))
+        # |K_j - K_i|² and |Σ a_k K_k|² (y_j - y_i = h Σ a_k K_k) as the error sums of the
+        # weights e_j - e_i and a with unit scale: one call on the compiled backend
+        KX, KW = self.KX, self.KW
+        num, den = self._errsums(KX, KW, self._stiff_d, self._stiff_a, KX[0], KW[0], KW[0], 0.0, 1.0)
+        den *= h * h
         if not den > 0.0 or not math.isfinite(num):
             return None
         return math.sqrt(num / den)
@@ -202,22 +218,27 @@ class AdaptiveRK(ExplicitRK):
                 self.stiff = None
 
     def initial_step(self, t):
-        """The starting step (:func:`.control.initial_step`)."""
-        prob = self.prob
-
-        def rates(X, W, ts):
-            KX, KW, _, _ = prob.rhs(X, W, ts)
-            return np.concatenate([KX, KW])
-
-        return initial_step(rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order)
+        """The starting step (:func:`.control.initial_step`). Its f at the start is the
+        first step's first stage, computed as that stage (as scipy reuses its f0): the
+        first step then starts from it, one f fewer."""
+        prob, KX, KW = self.prob, self.KX, self.KW
+        try:
+            prob.stage(KX, KW, 0, self._A[0], 0.0, self.W, t, t)
+            prob.flush(KX, KW)
+        except StepFailed:            # not finite at the start: the first step reports it
+            f0 = None
+        else:
+            f0 = np.concatenate([KX[0], KW[0]])
+            self._fsal = True
+        return initial_step(prob.rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order, f0=f0)
 
     def error_norm(self, h, X1, W1):
         s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
         if self.tab.e3 is None:
-            return abs(h) * np.sqrt(s5 / self._n)
+            return abs(h) * math.sqrt(s5 / self._n)
         if s5 == 0.0 and s3 == 0.0:
             return 0.0
-        return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * self._n)
+        return abs(h) * s5 / math.sqrt((s5 + 0.01 * s3) * self._n)
 
     def _attempt(self, t, h):
         tab = self.tab
@@ -237,7 +258,7 @@ class AdaptiveRK(ExplicitRK):
             self.control.rejected()
             return False, 0.25 * h
         en = self.error_norm(h, X1, W1)
-        if not np.isfinite(en):
+        if not math.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
         if en <= 1.0:
@@ -267,7 +288,9 @@ class DenseStep:
     extra stages are computed on the first evaluation."""
 
     def __init__(self, stepper, t, h, X1, W1):
-        self.st, self.t0, self.h = stepper, t, h
+        # the stepper's tableau and problem, not the stepper (which holds this step as its
+        # ``dense``: no reference cycle keeping a finished run alive until the collector runs)
+        self.tab, self.prob, self.t0, self.h = stepper.tab, stepper.prob, t, h
         self.t1 = t + h
         self.KX, self.KW = stepper.KX, stepper.KW
         self.W0, self.X1, self.W1 = stepper.W, X1, W1
@@ -276,7 +299,7 @@ class DenseStep:
         self._F = None
 
     def _coefficients(self):
-        tab, prob = self.st.tab, self.st.prob
+        tab, prob = self.tab, self.prob
         h, KX, KW = self.h, self.KX, self.KW
         if tab.P is not None:
             P = tab.P
@@ -312,7 +335,7 @@ class DenseStep:
             X, W = pw @ FX, self.W0 + pw @ FW
         else:
             X, W = _dop853_eval(FX, th), self.W0 + _dop853_eval(FW, th)
-        prob = self.st.prob
+        prob = self.prob
         with prob.based_at(self.base):
             return prob.state_at(X, W)
 

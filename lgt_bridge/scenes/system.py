@@ -14,6 +14,7 @@ from ..groups._vec import cross, hat
 from ..model import Layout, Model
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
+_ND, _F64 = np.ndarray, np.dtype(np.float64)
 _KS = None          # lgt_bridge.kernels.scene, imported by the first compiled scene
 
 
@@ -262,7 +263,11 @@ class RigidBodySystem(Model):
 
     def _f_kernel(self, q, V, t):
         out = np.empty(6 * self.nb)
-        (_KS or _kernels()).f(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
+        if (self.load is None and type(q) is _ND and type(V) is _ND and q.dtype is _F64 and V.dtype is _F64
+                and q.flags.c_contiguous and V.flags.c_contiguous):      # (the integrators' arrays)
+            (_KS or _kernels()).f(self._kI, self._kF, q, V, self._knoload, out)
+        else:
+            (_KS or _kernels()).f(self._kI, self._kF, *self._kernel_inputs(q, V, t), out)
         return out
 
     def _kernel_inputs(self, q, V, t):

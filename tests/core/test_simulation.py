@@ -40,3 +40,44 @@ def test_a_horizon_must_move_forward_and_options_are_checked_at_set_up():
         Simulation(scenes.free_body(), method="rkmk4")
     with pytest.raises(InputError, match="unknown chart"):
         Simulation(scenes.free_body(), method="rkmk4", dt=0.01, chart="cay3")
+
+
+def test_a_finished_run_is_freed_at_once():
+    """No reference cycle outlives a run (stepper <-> dense output, the progress bar's state):
+    what a call built is freed when its last reference goes, not at the next collection."""
+    import gc
+    import weakref
+    gc.disable()
+    try:
+        for method, kw in (("dop853", {}), ("rkmk4", dict(dt=1e-3))):
+            sim = Simulation(scenes.heavy_top(), method=method, t0=0.0, t_end=0.01, **kw)
+            sim.run(0.01, t_eval=[0.005, 0.01])
+            refs = [weakref.ref(o) for o in (sim, sim.stepper, sim.stepper.prob)]
+            del sim
+            assert all(r() is None for r in refs), method
+    finally:
+        gc.enable()
+
+
+def test_the_first_step_reuses_the_starting_steps_f():
+    """The starting step's f at the start is the first step's first stage (as scipy's f0):
+    one accepted dop853 step costs 2 + 12 evaluations of f, and the same step as before."""
+    m = scenes.free_body()
+    r = simulate(m, (0, 1e-3), method="dop853", rtol=1e-6, atol=1e-8)
+    assert r.stats["n_steps"] == 1 and r.stats["n_rejected"] == 0
+    assert r.stats["n_f"] == 14
+    sim = Simulation(m, method="dop853", rtol=1e-6, atol=1e-8, t0=0.0, t_end=1e-3)
+    sim.restart()                  # the first stage computed again by the step itself
+    r2 = sim.run(1e-3)
+    assert r2.stats["n_f"] == 15 and np.array_equal(r2.q, r.q) and np.array_equal(r2.V, r.V)
+
+
+def test_models_of_equal_layouts_share_their_analysis_and_a_new_layout_gets_its_own():
+    from lgt_bridge.integrators.problem import make_problem
+    a, b = make_problem(scenes.free_body(), "SO3xR3"), make_problem(scenes.free_body(), "SO3xR3")
+    assert a.sets is b.sets                          # one analysis for the two models
+    m = scenes.free_body()
+    make_problem(m, "SO3xR3")
+    m.layout = scenes.chain(3).layout                # (a model given another layout)
+    p = make_problem(m, "SO3xR3")
+    assert p.nX == 18 and p.nv == m.layout.nv

@@ -239,3 +239,19 @@ def test_bench_pinocchio_f_quick_writes_json_and_markdown(tmp_path):
     for r in data["rows"]:
         assert min(r["aba_us"], r["f_numba_us"], r["f_numpy_us"]) > 0 and r["max_rel_diff"] <= 1e-13
     assert "| free body | 6 |" in (tmp_path / "pinocchio_f.md").read_text()
+
+
+def test_a_model_and_its_run_are_freed_at_once():
+    """No reference cycle keeps a PinocchioModel (and its Pinocchio Data) alive after its
+    last reference goes: a model built per call is freed then, not at the next collection."""
+    import gc
+    import weakref
+    gc.disable()
+    try:
+        pm = PinocchioModel(free_body(), v0=np.array([0.1, 0.0, 0.2, 0.3, 1.0, -0.5]))
+        simulate(pm, (0, 0.01), method="dop853", rtol=1e-8, atol=1e-8, t_eval=[0.01])
+        ref = weakref.ref(pm)
+        del pm
+        assert ref() is None
+    finally:
+        gc.enable()
