@@ -25,20 +25,39 @@ from .ode1 import ODE1States
 
 
 class ExudynModel(StepHooks, Model):
-    """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate.simulate`.
+    """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate`.
 
-    backend: 'numba' (compiled conversions, :mod:`.kernels`) or 'numpy' (the reference
-    methods); default $LGT_BRIDGE_BACKEND, else numba. Build the model again after
-    ``mbs.Assemble()``: the compiled path writes through views of Exudyn's state.
+    Parameters
+    ----------
+    mbs : exudyn.MainSystem
+        The system, assembled (``mbs.Assemble()``). Build the model again after another
+        ``mbs.Assemble()``: the compiled path writes through views of Exudyn's state.
+    simulationSettings : exudyn.SimulationSettings, optional
+        The user's settings; read are
+        ``timeIntegration.generalizedAlpha.useIndex2Constraints`` (``index2``: constraints on
+        velocities only, as Exudyn enforces them then) and the discontinuous iteration's
+        tolerance.
+    backend : {"numba", "numpy"}, optional
+        Compiled conversions (:mod:`.kernels`) or the reference methods; default
+        $LGT_BRIDGE_BACKEND, else numba.
 
-    Parts: ``engine`` (:class:`.engine.Engine`: the evaluator and state writes), ``nodes``
-    (:class:`.layout.NodeLayout`: the layout and velocity maps), ``cons``
-    (:class:`.constraints.ConstraintRows`), ``ode1`` (:class:`.ode1.ODE1States`, or None);
-    ``Mbar``: the twist mass matrix when it is constant (then Exudyn's is never evaluated
-    again), else None. ``simulationSettings`` (optional): the user's; read are
-    ``timeIntegration.generalizedAlpha.useIndex2Constraints`` (``index2``: constraints on
-    velocities only, as Exudyn enforces them then) and the discontinuous iteration's
-    tolerance."""
+    Attributes
+    ----------
+    engine : lgt_exudyn.engine.Engine
+        The evaluator and state writes.
+    nodes : lgt_exudyn.layout.NodeLayout
+        The layout and velocity maps.
+    cons : lgt_exudyn.constraints.ConstraintRows
+        The constraint rows (inactive, redundant, velocity-level, time-dependent).
+    ode1 : lgt_exudyn.ode1.ODE1States or None
+        First-order coordinates integrated alongside.
+    Mbar : ndarray or None
+        The twist mass matrix when it is constant (then Exudyn's is never evaluated again).
+
+    See Also
+    --------
+    lgt_exudyn.SolveDynamic : the drop-in for ``mbs.SolveDynamic`` built on this model.
+    """
 
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend

@@ -101,37 +101,67 @@ def _initial_state(joints, pin, model, q0, v0):
 
 
 class PinocchioModel(Model):
-    """A ``pinocchio.Model`` for :func:`lgt_bridge.simulate.simulate`.
+    """A ``pinocchio.Model`` as a model for :func:`lgt_bridge.simulate` and :class:`lgt_bridge.Simulation`.
 
-    tau: None (zero), a vector of size nv, or ``tau(t, q, v)`` (Pinocchio's q and v).
-    tau_derivatives: None or ``tau_derivatives(t, q, v) -> (dtau_dq, dtau_dv)``, the
-    controller's Jacobians (nv x nv each; dtau_dq in Pinocchio's tangent coordinates, the
-    columns of pin.integrate's increments): generalized-α's Newton matrix then uses them
-    instead of 2 nv extra calls of tau per matrix (forward differences).
-    fext: None or ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector
-    (linear, angular)) per joint, ``model.njoints`` of them, in each joint's frame (a
-    ``pinocchio.StdVec_Force`` is passed on without conversion: the cheapest form).
-    constraints: ``pinocchio.RigidConstraintModel`` objects (3-D/6-D, to the world or loop
-    closures; Pinocchio 3 or 4) and, on Pinocchio 4, ``PointAnchorConstraintModel`` and
-    ``FrameAnchorConstraintModel`` (also inside a ``ConstraintModel``). They are copied when the
-    model is wrapped: changing one afterwards does not change this model (wrap it again).
-    Unilateral, friction and joint-limit constraints are refused, naming the class and why. As
-    Pinocchio means them: a constraint to the world left at the default identity placement
-    (``RigidConstraintModel(type, model, joint1_id, placement)``) holds its frame where it is
-    at q0; a loop not closed at q0 is projected onto closure before the first step
-    (:meth:`project_initial`; ``result.stats["initial_projection"]`` says how far), and refused
-    when that fails; rows redundant at q0 are set aside (``redundant_rows``, a ModelNote).
-    prox_settings: the ``pinocchio.ProximalSettings`` constraintDynamics uses (default:
-    ``ProximalSettings(1e-12, 1e-12, 50)``: accuracy, mu, max_iter).
-    q0, v0: initial state in Pinocchio's own coordinates (default: neutral, zero).
-    After a run: ``branch_switches`` and ``singular_passages``, the (start, end) times of the
-    passages near a singular configuration of the constraints in which the solution switched
-    assembly branch or stayed on it (each also a ModelNote; :meth:`write_back`).
-    backend: 'numba' or 'numpy' (default: $LGT_BRIDGE_BACKEND, else numba).
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The robot (free-flyers, spherical, continuous, planar, ZYX and vector-space joints).
+    tau : array_like or callable, optional
+        None (zero), a vector of size nv, or ``tau(t, q, v)`` (Pinocchio's q and v).
+    fext : callable, optional
+        ``fext(t, q, v)`` returning one ``pinocchio.Force`` (or 6-vector (linear, angular)) per
+        joint, ``model.njoints`` of them, in each joint's frame (a ``pinocchio.StdVec_Force``
+        is passed on without conversion: the cheapest form).
+    constraints : list, optional
+        ``pinocchio.RigidConstraintModel`` objects (3-D/6-D, to the world or loop closures;
+        Pinocchio 3 or 4) and, on Pinocchio 4, ``PointAnchorConstraintModel`` and
+        ``FrameAnchorConstraintModel`` (also inside a ``ConstraintModel``). They are copied
+        when the model is wrapped: changing one afterwards does not change this model (wrap it
+        again). Unilateral, friction and joint-limit constraints are refused, naming the class
+        and why. As Pinocchio means them: a constraint to the world left at the default
+        identity placement (``RigidConstraintModel(type, model, joint1_id, placement)``) holds
+        its frame where it is at q0; a loop not closed at q0 is projected onto closure before
+        the first step (:meth:`project_initial`; ``result.stats["initial_projection"]`` says how
+        far), and refused when that fails; rows redundant at q0 are set aside
+        (``redundant_rows``, a ModelNote).
+    q0, v0 : ndarray, optional
+        The initial state in Pinocchio's own coordinates (default: neutral, zero).
+    backend : {"numba", "numpy"}, optional
+        Default: $LGT_BRIDGE_BACKEND, else numba.
+    tau_derivatives : callable, optional
+        ``tau_derivatives(t, q, v) -> (dtau_dq, dtau_dv)``, the controller's Jacobians (nv x nv
+        each; dtau_dq in Pinocchio's tangent coordinates, the columns of pin.integrate's
+        increments): radau5's and generalized-α's Newton matrices then use them instead of
+        2 nv extra calls of tau per matrix (forward differences).
+    prox_settings : pinocchio.ProximalSettings, optional
+        The settings constraintDynamics uses (default ``ProximalSettings(1e-12, 1e-12, 50)``:
+        accuracy, mu, max_iter).
 
-    With the compiled backend, ``tau`` and ``fext`` receive the caller's q and the model's
-    own velocity buffer v, not copies: both are valid during the call only (copy them to
-    keep them) and must not be written to. f returns a new array either way.
+    Attributes
+    ----------
+    branch_switches, singular_passages : list of (float, float)
+        After a run: the (start, end) times of the passages near a singular configuration of
+        the constraints in which the solution switched assembly branch or stayed on it (each
+        also a ModelNote; :meth:`write_back`).
+
+    Notes
+    -----
+    With the compiled backend, ``tau`` and ``fext`` receive the caller's q and the model's own
+    velocity buffer v, not copies: both are valid during the call only (copy them to keep
+    them) and must not be written to. f returns a new array either way. Results hold
+    Pinocchio's own q but the bridge's twists V (angular first): :meth:`pin_state` converts.
+
+    Examples
+    --------
+    >>> import numpy as np, pinocchio as pin
+    >>> from lgt_bridge import simulate
+    >>> from lgt_pinocchio import PinocchioModel
+    >>> pin.seed(0)
+    >>> model = pin.buildSampleModelHumanoidRandom()
+    >>> m = PinocchioModel(model, tau=np.zeros(model.nv))
+    >>> r = simulate(m, (0.0, 0.01), method="dop853", rtol=1e-8, atol=1e-8)
+    >>> q, v = m.pin_state(r.q[-1], r.V[-1])
     """
 
     def __init__(self, model, *, tau=None, fext=None, constraints=None, q0=None, v0=None, backend=None,
