@@ -38,64 +38,98 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                  method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
                  project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn",
                  events=None):
-    """Like ``exudyn.SolveDynamic`` (same positional arguments; ``solverType`` is
-    ignored), integrated by the bridge with ``method``/``group``/``chart``.
+    """Like ``exudyn.SolveDynamic``, integrated by the bridge with ``method``/``group``/``chart``.
 
-    Honours from ``simulationSettings.timeIntegration``:
+    Exudyn's own step loop runs, each step computed by a :class:`lgt_bridge.Simulation`;
+    sensors, the solution file and the final state behave as with Exudyn's solver.
 
-    - ``startTime``, ``endTime``, ``numberOfSteps``: Exudyn's output step
-      h = (endTime − startTime)/numberOfSteps. Fixed-step methods (euler, rkmk2, rkmk4,
-      genalpha) step with h.
-    - ``automaticStepSize``: True (Exudyn's default): dopri5/dop853 control their step by
-      ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``
-      and, as Exudyn's own solvers, never step further than h (Exudyn's documented maximum
-      step; a load pulse shorter than the run is then not stepped over); output times
-      between steps come from dense output and never shorten steps. ``max_step``: "exudyn"
-      (default) that cap; a number: another cap; None: no cap (smooth models, where the
-      error control alone may take steps longer than h). False: dopri5/
-      dop853 take fixed steps of h with their own tableau (as Exudyn's DOPRI5 does), unless
-      ``rtol``/``atol`` are passed here, which always select error control. radau5 (implicit,
-      for stiff models) always controls its step by the tolerances.
-    - ``minimumStepSize`` (error control: a step the controller would shrink below it fails
-      with StepError), ``initialStepSize`` (error control: the first trial step when > 0;
-      0: the bridge's own starting-step estimate).
-    - ``generalizedAlpha.useIndex2Constraints``: True enforces the constraints on velocities
-      only, for every method (as Exudyn: an initial position violation stays, positions are
-      never projected); False (default): positions and velocities. Statistics:
-      ``constraints``.
-    - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``; ``verbose``
-      False silences it). ``realtime.active``/``simulateInRealtime``: ignored (one note).
+    Parameters
+    ----------
+    mbs : exudyn.MainSystem
+        The system (assembled here when ``autoAssemble`` and not yet consistent).
+    simulationSettings : exudyn.SimulationSettings, optional
+        Exudyn's settings; honoured from ``timeIntegration``:
 
-    ``rtol``/``atol`` override the settings' tolerances (a missing one comes from the
-    settings, or, for dopri5/dop853 with automaticStepSize False, is the bridge's default
-    rtol 1e-6 / atol 1e-8); ``stats["tolerance_source"]`` says per tolerance where it came
-    from ("given", "settings", "default"). ``group``/``chart`` may be "auto" as in
-    :func:`lgt_bridge.simulate`. ``progress``: a tqdm bar on stderr as in ``simulate``
-    (None: only for runs longer than about 1 s on a terminal, never in CI; True/False force
-    it). Returns True, and leaves the final state in the system, its accelerations included.
-    ``accelerations``: also write the engine's accelerations after each output step (one
-    more f evaluation each); None (default): only when an output reads them (the solution
-    file with accelerations exported, acceleration sensors, or sensors of objects, loads
-    and user functions, which may read forces); likewise the Lagrange multipliers of
-    the state written, in Exudyn's algebraic coordinates (joint force sensors read them). A failed step raises StepError with the
-    system at the last good state; statistics are in ``mbs.sys['lgtBridgeStats']``.
+        - ``startTime``, ``endTime``, ``numberOfSteps``: Exudyn's output step
+          h = (endTime − startTime)/numberOfSteps. Fixed-step methods (euler, rkmk2, rkmk4,
+          genalpha) step with h.
+        - ``automaticStepSize``: True (Exudyn's default): dopri5/dop853 control their step by
+          ``relativeTolerance`` (0 allowed: pure absolute tolerance) and ``absoluteTolerance``
+          and, as Exudyn's own solvers, never step further than h (see ``max_step``); output
+          times between steps come from dense output and never shorten steps. False:
+          dopri5/dop853 take fixed steps of h with their own tableau (as Exudyn's DOPRI5
+          does), unless ``rtol``/``atol`` are passed here, which always select error control.
+          radau5 (implicit, for stiff models) always controls its step by the tolerances.
+        - ``minimumStepSize`` (error control: a step the controller would shrink below it
+          fails with StepError), ``initialStepSize`` (the first trial step when > 0; 0: the
+          bridge's own starting-step estimate).
+        - ``generalizedAlpha.useIndex2Constraints``: True enforces the constraints on
+          velocities only, for every method (as Exudyn: an initial position violation stays,
+          positions are never projected); False (default): positions and velocities.
+        - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``).
+          ``realtime.active``/``simulateInRealtime``: ignored (one note).
+    solverType : ignored
+        ``method`` chooses the integrator.
+    updateInitialValues : bool, default False
+        As Exudyn: the final state becomes the system's initial state.
+    storeSolver : bool, default True
+        As Exudyn: the solver object is kept in ``mbs.sys["dynamicSolver"]``.
+    showHints, showCausingItems
+        Accepted for a drop-in call (the bridge's errors name the causing items themselves).
+    autoAssemble : bool, default True
+        Call ``mbs.Assemble()`` first when the system is not consistent.
+    method, group, chart, rho_inf, project
+        As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto").
+    rtol, atol : float, optional
+        Override the settings' tolerances (a missing one comes from the settings, or, for
+        dopri5/dop853 with automaticStepSize False, is the bridge's default rtol 1e-6 /
+        atol 1e-8); ``stats["tolerance_source"]`` says per tolerance where it came from
+        ("given", "settings", "default").
+    verbose : bool, optional
+        Print the one-line description (method, group, chart, tolerances and their source);
+        None: as ``verboseMode``; False silences it.
+    accelerations : bool, optional
+        Also write the engine's accelerations after each output step (one more f evaluation
+        each); None (default): only when an output reads them (the solution file with
+        accelerations exported, acceleration sensors, or sensors of objects, loads and user
+        functions, which may read forces); likewise the Lagrange multipliers of the state
+        written, in Exudyn's algebraic coordinates (joint force sensors read them).
+    progress : bool, optional
+        A tqdm bar on stderr as in :func:`lgt_bridge.simulate`.
+    max_step : "exudyn", float or None, default "exudyn"
+        The largest adaptive step: "exudyn" is h (Exudyn's documented maximum step; a load
+        pulse shorter than the run is then not stepped over); a number: another cap; None: no
+        cap (smooth models, where the error control alone may take steps longer than h).
+    events : callable or list of callable, optional
+        Functions g(t, q, V) -> float on the bridge's model coordinates (q: the
+        :class:`ExudynModel`'s, Exudyn's total coordinates of the nodes; V: the twists), with
+        scipy's ``terminal``/``direction`` (:mod:`lgt_bridge.events`; checked before the first
+        step). The bridge's steps then end on Exudyn's steps (as with a pre-step user
+        function), so every crossing lies in the Exudyn step in which it is found. The
+        crossings are in the statistics (``t_events``, ``q_events``, ``V_events``, per event
+        function). A terminal event ends Exudyn's run at the located time: the system's state,
+        time, accelerations and multipliers are those of the event, sensors record that last
+        time, and the statistics' ``message`` names the event.
 
+    Returns
+    -------
+    bool
+        True, with the final state left in the system, its accelerations included;
+        statistics in ``mbs.sys['lgtBridgeStats']``.
+
+    Raises
+    ------
+    lgt_bridge.StepError
+        A failed step, with the system at the last good state.
+    lgt_bridge.InputError
+        Bad settings or options, before the first step.
+
+    Notes
+    -----
     Pre-step user functions (``mbs.SetPreStepUserFunction``) may change the model between
-    Exudyn's steps: connectors switched on or off are classified again and the stepper
-    rebuilt (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step
-    as a time dependence (the explicit methods follow it in position and velocity). After
-    each output step the Lagrange multipliers of the state written are put into Exudyn's
-    algebraic coordinates (joint force sensors read them).
-
-    ``events``: functions g(t, q, V) -> float on the bridge's model coordinates (q: the
-    :class:`ExudynModel`'s, Exudyn's total coordinates of the nodes; V: the twists), with
-    scipy's ``terminal``/``direction`` (:mod:`lgt_bridge.events`; checked before the first
-    step). The bridge's steps then end on Exudyn's steps (as with a pre-step user function),
-    so every crossing lies in the Exudyn step in which it is found. The crossings are in the
-    statistics (``t_events``, ``q_events``, ``V_events``, per event function). A terminal
-    event ends Exudyn's run at the located time: the system's state, time, accelerations
-    and multipliers are those of the event, sensors record that last time, and the
-    statistics' ``message`` names the event (``success`` True; SolveDynamic returns True).
+    Exudyn's steps: connectors switched on or off are classified again and the stepper rebuilt
+    (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step as a time
+    dependence (the explicit methods follow it in position and velocity).
     """
     import exudyn as exu
     if simulationSettings is None:
