@@ -10,9 +10,10 @@ with the γ differences). Imported only when used (it imports numba).
   constraints) by ``lgt_bridge.model.solve_schur`` from the buffers it left (:func:`buffers`);
 * :func:`pack` (model): the tables of :mod:`.kernel_tables` and, for a constrained model
   with a constant M̄, the sparse rows (``P.sp``, :class:`SparseRows`): A in CSR and the
-  sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is a
-  spherical joint's (checked against Exudyn's Jacobian and γ's differences at the
-  analysis), else A from Exudyn's dense Jacobian gathered into the pattern.
+  sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is
+  a joint's :mod:`.sparse` knows (spherical, generic, revolute-z, prismatic-x; checked
+  against Exudyn's Jacobian and γ's differences at the analysis), else A from Exudyn's
+  dense Jacobian gathered into the pattern.
 
 The numpy reference is ExudynModel's own f (:mod:`.layout`'s maps, :mod:`.constraints`' γ
 and ``lgt_bridge.model.solve_kkt``); tests/test_exudyn_kernels.py holds them equal (1e-13;
@@ -46,14 +47,17 @@ class SparseRows:
     :func:`.kernel_sparse.joint_rows` when the rows are computed in closed form, else None
     (A from Exudyn's dense Jacobian: ``flat``, the pattern's positions in a dense nc x nv A)."""
 
-    def __init__(self, P, aptr, acol, joints):
-        self.aptr, self.acol, self.joints = aptr, acol, joints
-        self.rows = np.repeat(np.arange(len(aptr) - 1), np.diff(aptr))
-        self.flat = self.rows * P.nv + acol
-        self.aval = np.zeros(len(acol))
+    def __init__(self, P, aptr, acol, joints, nonzero=None):
+        self.aptr, self.acol, self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol, nonzero)
+        #: closed-form rows fill the pattern they were given: kept only when widening it to
+        #: whole slots (:func:`.sparse.structure`) left it as it was
+        same = len(self.acol) == len(acol) and np.array_equal(self.acol, acol)
+        self.joints = joints if same else None
+        self.rows = np.repeat(np.arange(len(self.aptr) - 1), np.diff(self.aptr))
+        self.flat = self.rows * P.nv + self.acol
+        self.aval = np.zeros(len(self.acol))
         #: the last sparse_solve left λ (unique: no redundant rows) in F's LAM section
         self.lam_ok = False
-        self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol)
 
     def dense(self, nc, nv):
         """A as a dense nc x nv array (from ``aval``)."""
@@ -78,8 +82,9 @@ def pack(model, nc_max=None, views=True):
     pattern = joints[2:] if joints is not None else sparse.ltg_pattern(model)
     if pattern is None:
         return P
-    sp = SparseRows(P, *pattern, joints=None if joints is None else joints[:2])
-    if joints is None and not _pattern_holds(model, P, sp):
+    sp = SparseRows(P, *pattern[:2], joints=None if joints is None else joints[:2],
+                    nonzero=pattern[2] if joints is not None else None)
+    if sp.joints is None and not _pattern_holds(model, P, sp):
         return P
     P.sp = sp
     return P
@@ -98,9 +103,9 @@ def _dense_A(model, q):
     return model.cons.Cq() @ model.nodes.H(q)
 
 
-def _joints_agree(model, P, J, Jf, aptr, acol):
+def _joints_agree(model, P, J, Jf, aptr, acol, nonzero):
     """True when the closed-form rows equal Exudyn's Jacobian (C_q H) and γ its differences
-    at the analysis states; leaves the system's state as it found it."""
+    at the analysis states (and are zero where ``nonzero`` says they stay zero); leaves the system's state as it found it."""
     sd = model.sd
     keep = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()), sd.GetTime())
     nc, nv = model.n_constraints, model.nv
@@ -109,6 +114,8 @@ def _joints_agree(model, P, J, Jf, aptr, acol):
         for q, V in _states(model):
             aval, gam = np.zeros(len(acol)), np.zeros(nc)
             joint_rows(P.T, np.ascontiguousarray(q, float), np.ascontiguousarray(V, float), J, Jf, aval, gam)
+            if np.any(aval[~nonzero]):
+                return False
             A = np.zeros((nc, nv))
             np.add.at(A, (rows, acol), aval)
             Ad = _dense_A(model, q)
