@@ -29,7 +29,9 @@ def heavy_top(node=EP, joint=True, R0=None, assemble=True):
 
 
 def chain(n=5, node=EP, joint="spherical"):
-    """n links along x from a ground joint, spinning about the vertical (as scenes.chain)."""
+    """n links along x from a ground joint, spinning about the vertical (as scenes.chain);
+    ``joint``: "spherical" (CreateSphericalJoint), "revolute" (CreateRevoluteJoint, about y:
+    JointRevoluteZ) or "generic" (CreateGenericJoint, revolute about y)."""
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.AddObject(ObjectGround())
@@ -41,6 +43,8 @@ def chain(n=5, node=EP, joint="spherical"):
                                 initialAngularVelocity=[0, 0, spin], initialVelocity=[0, spin * x, 0], gravity=G)
         if joint == "spherical":
             mbs.CreateSphericalJoint(itemNumbers=[prev, b], position=[float(k), 0, 0])
+        elif joint == "generic":            # revolute about y as a generic joint
+            mbs.CreateGenericJoint(itemNumbers=[prev, b], position=[float(k), 0, 0], constrainedAxes=[1, 1, 1, 1, 0, 1])
         else:
             mbs.CreateRevoluteJoint(itemNumbers=[prev, b], position=[float(k), 0, 0], axis=[0, 1, 0])
         prev = b
