@@ -13,7 +13,8 @@ with the γ differences). Imported only when used (it imports numba).
   sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is
   a joint's :mod:`.sparse` knows (spherical, generic, revolute-z, prismatic-x; checked
   against Exudyn's Jacobian and γ's differences at the analysis), else A from Exudyn's
-  dense Jacobian gathered into the pattern.
+  dense Jacobian gathered into the pattern — once, when it is the same at every analysis
+  state and nothing moves in time (coordinate constraints: γ = 0).
 
 The numpy reference is ExudynModel's own f (:mod:`.layout`'s maps, :mod:`.constraints`' γ
 and ``lgt_bridge.model.solve_kkt``); tests/test_exudyn_kernels.py holds them equal (1e-13;
@@ -58,11 +59,17 @@ class SparseRows:
         self.aval = np.zeros(len(self.acol))
         #: the last sparse_solve left λ (unique: no redundant rows) in F's LAM section
         self.lam_ok = False
+        #: A is the same everywhere (``aval`` set once, γ = 0)
+        self.constant = False
 
     def dense(self, nc, nv):
-        """A as a dense nc x nv array (from ``aval``)."""
+        """A as a dense nc x nv array (from ``aval``; kept for constant rows)."""
+        if self.constant and getattr(self, "_dense", None) is not None:
+            return self._dense.copy()
         A = np.zeros((nc, nv))
         np.add.at(A, (self.rows, self.acol), self.aval)
+        if self.constant:
+            self._dense = A.copy()
         return A
 
 
@@ -84,9 +91,15 @@ def pack(model, nc_max=None, views=True):
         return P
     sp = SparseRows(P, *pattern[:2], joints=None if joints is None else joints[:2],
                     nonzero=pattern[2] if joints is not None else None)
-    if sp.joints is None and not _pattern_holds(model, P, sp):
-        return P
+    if sp.joints is None:
+        held = _pattern_holds(model, P, sp)
+        if held is None:
+            return P
+        if held is not False:                  # the same A at every analysis state
+            sp.aval[:] = held
+            sp.constant = True
     P.sp = sp
+    P.gam0c = np.zeros(model.n_constraints)
     return P
 
 
@@ -132,18 +145,25 @@ def _joints_agree(model, P, J, Jf, aptr, acol, nonzero):
 
 
 def _pattern_holds(model, P, sp):
-    """True when Exudyn's Jacobian at the analysis states is zero outside sp's pattern."""
-    sd = model.sd
+    """None when Exudyn's Jacobian at the analysis states is nonzero outside sp's pattern;
+    else A's values in the pattern when they are the same at every analysis state (constant
+    rows: coordinate constraints between vector-space coordinates, not moving in time, so
+    γ = d/dt(A V) = 0), else False."""
+    sd, cons = model.sd, model.cons
     keep = np.array(sd.GetODE2Coordinates())
+    vals = []
     try:
-        for q, _ in _states(model):
+        for q, _ in _states(model) + [(model.nodes.moved(model.q0[:model.n2], np.ones(model.nv), 0.1), None)]:
             A = _dense_A(model, q)
+            vals.append(A.ravel()[sp.flat].copy())
             A.ravel()[sp.flat] = 0.0
             if np.abs(A).max() > 0.0:
-                return False
-        return True
+                return None
     finally:
         sd.SetODE2Coordinates(keep)
+    if cons.time_dependent or cons.nonholonomic or cons.velocity_rows or any(np.any(v != vals[0]) for v in vals):
+        return False
+    return vals[0]
 
 
 def sparse_values(model, P, q):
@@ -152,7 +172,7 @@ def sparse_values(model, P, q):
     sp = P.sp
     if sp.joints is not None:
         joint_rows(P.T, q, np.zeros(P.nv), sp.joints[0], sp.joints[1], sp.aval, P.gam)
-    else:
+    elif not sp.constant:
         model.sd.SetODE2Coordinates(q - model.ref)
         E = model.engine
         constraint_matrix(P.T, P.off, P.w, q, E.ae_jacobian_full(1.0, 1.0 if model.cons.nonholonomic else 0.0),
@@ -246,6 +266,8 @@ def f_compiled(model, P, q, V, t):
     if nc and sp is not None and sp.joints is not None:
         gam = P.gam
         joint_rows(T, q, V, sp.joints[0], sp.joints[1], sp.aval, gam)
+    elif nc and sp is not None and sp.constant:
+        gam = P.gam0c
     elif nc:
         td = cons.time_dependent
         if (td and not cons.exudyn_gt) or not cons.velocity_level:
@@ -273,7 +295,7 @@ def f_compiled(model, P, q, V, t):
     model.n_eval += 1
     Vd = np.empty(P.nv)
     if sp is not None:
-        if sp.joints is None:
+        if sp.joints is None and not sp.constant:
             constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, P.A)
             np.take(P.A.ravel(), sp.flat, out=sp.aval)
         sp.lam_ok = sparse_solve(T, off, w, sp.I, sp.io, sp.F, sp.fo, sp.aval, P.Qbar, gam, Vd) == 0

@@ -241,12 +241,14 @@ class ExudynModel(StepHooks, Model):
     def _jacobian2(self, q):
         if not self.n_constraints:
             return np.zeros((0, self.nv))
+        if self._compiled and self._pack().sp is not None and self._P.sp.constant:
+            return self._P.sp.dense(self.n_constraints, self.nv)      # the same everywhere
         self.sd.SetODE2Coordinates(q - self.ref)
         if not self._compiled:
             return self.cons.Cq() @ self.nodes.H(q)
         P = self._pack()
         q = np.ascontiguousarray(q, float)
-        if P.sp is not None and P.sp.joints is not None:        # closed-form rows: no Exudyn Jacobian
+        if P.sp is not None and (P.sp.joints is not None or P.sp.constant):   # no Exudyn Jacobian
             self._kernels.sparse_values(self, P, q)
             return P.sp.dense(self.n_constraints, self.nv)
         A = np.empty((self.n_constraints, self.nv))
@@ -262,6 +264,8 @@ class ExudynModel(StepHooks, Model):
             if self.nv > SPARSE_INVERSE_MIN:               # block-diagonal: its blocks' inverses
                 from .kernel_tables import sparse_inverse
                 inv = sparse_inverse(self.Mbar)
+                if inv is not None and inv.nnz > self.nv * self.nv // 8:
+                    inv = inv.toarray()                      # hardly sparse (one flexible body)
             self._Mbar_inv = inv if inv is not None else np.linalg.inv(self.Mbar)
         return self._Mbar_inv @ B
 
@@ -323,12 +327,13 @@ class ExudynModel(StepHooks, Model):
                 cached = self._it_cache = (key, parts)
                 return combine_iteration(parts, c_acc, c_vel, c_pos)
             S, n2 = self.solver, self.n2
-            H = self.nodes.H(np.asarray(q, float))
+            # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
+            # threads, woken once per matrix under load, cost ~30 ms a call
+            H = self.nodes.H_sparse(np.asarray(q, float))
             Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
             self.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
             if sparse:
                 from scipy.sparse import csr_matrix as to
-                H = to(H)
             else:
                 def to(X):
                     return X
@@ -336,7 +341,8 @@ class ExudynModel(StepHooks, Model):
             for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
                 S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
                 J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
-                parts.append(-(H.T @ (J @ H)))
+                JH = J @ H if sparse else (H.T @ J.T).T                     # J H
+                parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
@@ -370,7 +376,7 @@ class ExudynModel(StepHooks, Model):
             P = self._pack()
             if P.sp is not None:
                 from scipy.sparse import csr_matrix
-                if P.sp.joints is None:
+                if P.sp.joints is None and not P.sp.constant:
                     self.sd.SetODE2Coordinates(q - self.ref)
                 aval = self._kernels.sparse_values(self, P, np.ascontiguousarray(q, float))
                 return csr_matrix((aval.copy(), P.sp.acol, P.sp.aptr), shape=(self.n_constraints, self.nv))

@@ -89,3 +89,22 @@ def free_bodies(n=8, node=ROTVEC, seed=0):
     mbs.Assemble()
     return SC, mbs
 
+
+
+def ancf_pendulum(n=25, L=2.0, EI=1.0, rhoA=1.0):
+    """A flexible pendulum as Exudyn's examples build it: n ObjectANCFCable2D elements
+    (reduced integration, axial stiffness 1e4 EI) along x from a pinned end
+    (``GenerateStraightLineANCFCable2D`` with fixedConstraintsNode0=[1, 1, 0, 0]: two
+    CoordinateConstraints), falling under gravity along -y; 4 (n + 1) coordinates."""
+    from exudyn.beams import GenerateStraightLineANCFCable2D
+    from exudyn.utilities import ObjectANCFCable2D
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    mbs.AddObject(ObjectGround())
+    cable = ObjectANCFCable2D(physicsMassPerLength=rhoA, physicsBendingStiffness=EI,
+                              physicsAxialStiffness=EI * 1e4, useReducedOrderIntegration=True)
+    GenerateStraightLineANCFCable2D(mbs, positionOfNode0=[0, 0, 0], positionOfNode1=[L, 0, 0], numberOfElements=n,
+                                    cableTemplate=cable, massProportionalLoad=[0, -9.81, 0],
+                                    fixedConstraintsNode0=[1, 1, 0, 0], fixedConstraintsNode1=[0, 0, 0, 0])
+    mbs.Assemble()
+    return SC, mbs

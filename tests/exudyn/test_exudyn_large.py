@@ -142,3 +142,21 @@ def test_genalpha_on_the_sparse_paths_matches_the_dense_paths(monkeypatch):
     assert fast.stats["n_steps"] == slow.stats["n_steps"]
     assert np.abs(fast.q[-1] - slow.q[-1]).max() < 1e-9 * np.abs(slow.q[-1]).max()
     assert np.abs(fast.V[-1] - slow.V[-1]).max() < 1e-7 * np.abs(slow.V[-1]).max()
+
+
+def test_coordinate_constraints_are_constant_rows(rng):
+    """A pinned ANCF cable (two CoordinateConstraints): A is read from Exudyn once (the same
+    at every analysis state, γ = 0); f and A equal the numpy backend's at moved states."""
+    from lgt_exudyn import kernels as K
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        SC, mbs = scenes.ancf_pendulum(4)
+        m = ExudynModel(mbs)
+        ref = ExudynModel(mbs, backend="numpy")
+    P = K.pack(m)
+    assert P.sp is not None and P.sp.constant and P.sp.joints is None
+    for _ in range(2):
+        q = m.q0 + 0.05 * rng.normal(size=m.n2)
+        V = rng.normal(size=m.nv)
+        assert np.abs(m.f(q, V, 0.1) - ref.f(q, V, 0.1)).max() <= 1e-9 * max(1.0, np.abs(ref.f(q, V, 0.1)).max())
+        assert np.abs(m.constraint_jacobian(q) - ref.constraint_jacobian(q)).max() <= 1e-15
