@@ -21,10 +21,13 @@ Needs the ``exudyn`` and ``robots`` extras. Sections, each with its target:
       written every 1 ms — numberOfSteps = 2000): ``SolveDynamic`` (dop853, SO3xR3) against
       Exudyn's own generalized-α (its best solver on this model; steps refined), wall time at
       relative ω error 1e-6 and 1e-8 at t = 2 s; targets ≥ 20× and ≥ 60×.
-  (e) f of an Exudyn chain of 10, 30, 100 bodies with spherical joints against one evaluation
-      of Exudyn's own residual (ODE2 right-hand side + algebraic equations); target ≤ 5× at 100.
-      The 100-body chain run for 1 s at numberOfSteps 1000 through ``lgt_exudyn.SolveDynamic``
-      (dopri5) against Exudyn's own generalized-α with its sparse solver; target ≤ 2× its wall.
+  (e) f of an Exudyn chain of 10, 30, 100 bodies with spherical joints and of 100 bodies with
+      revolute (CreateRevoluteJoint) and generic (CreateGenericJoint) joints against one
+      evaluation of Exudyn's own residual (ODE2 right-hand side + algebraic equations); target
+      ≤ 5× at 100. The 100-body chains run for 1 s at numberOfSteps 1000 through
+      ``lgt_exudyn.SolveDynamic`` (dopri5, genalpha), and the pinned 104-coordinate ANCF cable
+      pendulum (genalpha, radau5), against Exudyn's own generalized-α with its sparse solver;
+      target ≤ 2× its wall.
   (f) (a) and (b) for the first robot again with a second process spinning on the other
       core; ratios should hold.
 Costs at a target error: log-log interpolation between bracketing runs ("≈"), else the
@@ -249,13 +252,14 @@ def exudyn_sensor_top(tols, ga_steps):
 
 
 # --- (e) a large constrained model's f ----------------------------------------------------
-def exudyn_chain_f(ns=(10, 30, 100)):
+def exudyn_chain_f(cases=(("spherical", 10), ("spherical", 30), ("spherical", 100), ("revolute", 100),
+                            ("generic", 100))):
     import exudyn as exu
     from lgt_exudyn import ExudynModel
     from lgt_exudyn.scenes import chain
     rows = []
-    for n in ns:
-        SC, mbs = chain(n)
+    for joint, n in cases:
+        SC, mbs = chain(n, joint=joint)
         m = ExudynModel(mbs)
         q, V = m.q0, m.V0
         m.f(q, V, 0.0)
@@ -274,40 +278,70 @@ def exudyn_chain_f(ns=(10, 30, 100)):
         for _ in range(3):                      # interleaved, best of 3 each
             wf = min(wf, best(lambda: [m.f(q, V, 0.0) for _ in range(k)], 3)[0])
             wn = min(wn, best(native, 3)[0])
-        rows.append(ratio_row(f"(e) f of an Exudyn chain of {n} bodies with spherical joints vs one evaluation of "
+        rows.append(ratio_row(f"(e) f of an Exudyn chain of {n} bodies with {joint} joints vs one evaluation of "
                               "Exudyn's residual (ODE2 RHS + algebraic equations)", wf / k, wn / k, 5.0, higher=False))
     return rows
 
 
-def exudyn_chain_run(n=100, T=1.0, steps=1000):
-    """The 100-body chain run for T at numberOfSteps = steps: Exudyn's own solver (its default
-    generalized-α, with the sparse linear solver its warning recommends for this size) against
-    lgt_exudyn.SolveDynamic (dopri5, the script's settings: Exudyn's tolerances, its step as the
-    largest step), model construction in the call. Also the largest tip-position difference."""
+def _versus_exudyn(label, build, settings_of, method, target=2.0, repeats=2):
+    """A user's whole SolveDynamic call (model construction excluded, set-up included) through
+    lgt_exudyn.SolveDynamic(method) against Exudyn's own generalized-α (EigenSparse, as its
+    warning recommends above 1000 unknowns), interleaved, best of ``repeats``; the row also
+    gives the largest difference of the final coordinates."""
     import exudyn as exu
     from lgt_exudyn import SolveDynamic
-    from lgt_exudyn.scenes import chain, settings, total_q
+    from lgt_exudyn.scenes import total_q
 
     def native():
-        SC, mbs = chain(n)
-        s = settings(T, steps)
+        SC, mbs = build()
+        s = settings_of()
         s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
         t = time.perf_counter()
         mbs.SolveDynamic(s)
-        return time.perf_counter() - t, total_q(mbs), SC
+        return time.perf_counter() - t, total_q(mbs)
 
     def bridge():
-        SC, mbs = chain(n)
-        s = settings(T, steps)
+        SC, mbs = build()
+        s = settings_of()
         t = time.perf_counter()
-        SolveDynamic(mbs, s, method="dopri5")
-        return time.perf_counter() - t, total_q(mbs), SC
-    wn, qn, _ = native()
-    wb, qb, _ = bridge()
+        SolveDynamic(mbs, s, method=method)
+        return time.perf_counter() - t, total_q(mbs)
+    wn = wb = np.inf
+    for _ in range(repeats):
+        w, qn = native()
+        wn = min(wn, w)
+        w, qb = bridge()
+        wb = min(wb, w)
     diff = float(np.abs(qn - qb).max())
-    return [ratio_row(f"(e) Exudyn chain of {n} bodies, {T:g} s at numberOfSteps {steps}: lgt_exudyn.SolveDynamic "
-                      f"dopri5 vs Exudyn's generalized-α (EigenSparse); states differ by {diff:.1e}",
-                      wb, wn, 2.0, higher=False)]
+    return ratio_row(f"{label}: lgt_exudyn.SolveDynamic {method} vs Exudyn's generalized-α (EigenSparse); final "
+                     f"coordinates differ by {diff:.1e}", wb, wn, target, higher=False)
+
+
+def exudyn_chain_run(n=100, T=1.0, steps=1000):
+    """The 100-body chains run for T at numberOfSteps = steps (the script's settings: Exudyn's
+    tolerances, its step as the largest step) through lgt_exudyn.SolveDynamic against Exudyn's
+    own generalized-α with its sparse solver: dopri5 and genalpha (at Exudyn's step)."""
+    from lgt_exudyn.scenes import chain, settings
+    rows = []
+    for joint, method in (("spherical", "dopri5"), ("revolute", "dopri5"), ("spherical", "genalpha"),
+                          ("revolute", "genalpha")):
+        rows.append(_versus_exudyn(f"(e) Exudyn chain of {n} bodies ({joint} joints), {T:g} s at numberOfSteps "
+                                   f"{steps}", lambda: chain(n, joint=joint), lambda: settings(T, steps), method))
+    return rows
+
+
+def exudyn_ancf_run(T=1.0, steps=1000):
+    """The pinned ANCF cable pendulum (25 ObjectANCFCable2D elements, 104 coordinates; Exudyn's
+    example settings: modified Newton) for T at numberOfSteps = steps: genalpha and radau5
+    against Exudyn's generalized-α."""
+    from lgt_exudyn.scenes import ancf_pendulum, settings
+
+    def settings_of():
+        s = settings(T, steps)
+        s.timeIntegration.newton.useModifiedNewton = True
+        return s
+    return [_versus_exudyn(f"(e) ANCF cable pendulum (104 coordinates), {T:g} s at numberOfSteps {steps}",
+                           ancf_pendulum, settings_of, method) for method in ("genalpha", "radau5")]
 
 
 def _spin(stop):
@@ -353,6 +387,7 @@ def main(argv=None):
                               [4000, 16000] if a.quick else [4000, 16000, 64000])
     rows += exudyn_chain_f()
     rows += exudyn_chain_run()
+    rows += exudyn_ancf_run()
     if not a.no_load:
         stop = mp.Event()
         p = mp.Process(target=_spin, args=(stop,), daemon=True)

@@ -12,6 +12,8 @@ from lgt_bridge.errors import InputError
 
 #: rows of the normalized constraint Jacobian whose pivot falls below this count as dependent
 RANK_TOL = 1e-9
+#: the shift of the Cholesky test of clearly independent rows (:func:`_clearly_independent`)
+SHIFT = 1e-10
 #: the step of γ's central differences, relative to max(1, |V|∞)
 EPS_GAMMA = 1e-5
 
@@ -36,16 +38,18 @@ def independent_rows(A):
 
 
 def _clearly_independent(An):
-    """True when σ_min(An)² > 1e-6 (rows of unit norm): An Anᵀ - 1e-6 I has a Cholesky
-    factor (backward stable: its rounding, ~n eps, is far below 1e-6). The pivoted QR's
-    diagonal is then at least σ_min ≫ RANK_TOL: it would keep every row. Large models
-    (where the QR costs O(n² nv)) factorize banded, in the rows' reverse Cuthill-McKee order."""
+    """True when σ_min(An)² > SHIFT (rows of unit norm): An Anᵀ - SHIFT I has a Cholesky
+    factor (backward stable: its rounding, ~(band) eps ‖An Anᵀ‖ with ‖An Anᵀ‖ at most the
+    number of rows a row overlaps, is far below SHIFT = 1e-10). The pivoted QR's diagonal is
+    then at least σ_min > 1e-5 ≫ RANK_TOL: it would keep every row. (A 100-body revolute
+    chain has σ_min² ≈ 6e-8.) Large models (where the QR costs O(n² nv)) factorize banded,
+    in the rows' reverse Cuthill-McKee order."""
     from scipy.linalg import LinAlgError, cholesky_banded
     from scipy.sparse import csr_matrix, identity
     from scipy.sparse.csgraph import reverse_cuthill_mckee
     n = An.shape[0]
     S = csr_matrix(An)
-    G = (S @ S.T - 1e-6 * identity(n)).tocsr()
+    G = (S @ S.T - SHIFT * identity(n)).tocsr()
     p = reverse_cuthill_mckee(G, symmetric_mode=True)
     G = G[p][:, p].tocoo()
     band = int(np.abs(G.row - G.col).max(initial=0))

@@ -119,6 +119,25 @@ def _block_inverses(Mb, members, sizes):
     return out
 
 
+def sparse_inverse(Mb):
+    """M̄⁻¹ as a scipy CSR matrix from the inverses of M̄'s diagonal blocks (large models:
+    no dense inverse), or None when a block is not positive definite."""
+    from scipy.sparse import csr_matrix
+    members, sizes = components(Mb)
+    inverses = _block_inverses(Mb, members, sizes)
+    if inverses is None:
+        return None
+    start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    r, c, v = [], [], []
+    for size, (cs, _, inv) in inverses.items():
+        idx = members[start[cs][:, None] + np.arange(size)]                 # (k, size)
+        r.append(np.repeat(idx, size, axis=1).ravel())
+        c.append(np.tile(idx, (1, size)).ravel())
+        v.append(inv.ravel())
+    n = Mb.shape[0]
+    return csr_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(n, n))
+
+
 def _rows(rows):
     """An int64 section of T from rows of one length (-1 in the columns they do not use)."""
     t = np.full((len(rows), NCOL), -1, np.int64)

@@ -10,9 +10,11 @@ with the γ differences). Imported only when used (it imports numba).
   constraints) by ``lgt_bridge.model.solve_schur`` from the buffers it left (:func:`buffers`);
 * :func:`pack` (model): the tables of :mod:`.kernel_tables` and, for a constrained model
   with a constant M̄, the sparse rows (``P.sp``, :class:`SparseRows`): A in CSR and the
-  sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is a
-  spherical joint's (checked against Exudyn's Jacobian and γ's differences at the
-  analysis), else A from Exudyn's dense Jacobian gathered into the pattern.
+  sparse index-1 solve of :mod:`.kernel_sparse` — A and γ in closed form when every row is
+  a joint's :mod:`.sparse` knows (spherical, generic, revolute-z, prismatic-x; checked
+  against Exudyn's Jacobian and γ's differences at the analysis), else A from Exudyn's
+  dense Jacobian gathered into the pattern — once, when it is the same at every analysis
+  state and nothing moves in time (coordinate constraints: γ = 0).
 
 The numpy reference is ExudynModel's own f (:mod:`.layout`'s maps, :mod:`.constraints`' γ
 and ``lgt_bridge.model.solve_kkt``); tests/test_exudyn_kernels.py holds them equal (1e-13;
@@ -46,19 +48,28 @@ class SparseRows:
     :func:`.kernel_sparse.joint_rows` when the rows are computed in closed form, else None
     (A from Exudyn's dense Jacobian: ``flat``, the pattern's positions in a dense nc x nv A)."""
 
-    def __init__(self, P, aptr, acol, joints):
-        self.aptr, self.acol, self.joints = aptr, acol, joints
-        self.rows = np.repeat(np.arange(len(aptr) - 1), np.diff(aptr))
-        self.flat = self.rows * P.nv + acol
-        self.aval = np.zeros(len(acol))
+    def __init__(self, P, aptr, acol, joints, nonzero=None):
+        self.aptr, self.acol, self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol, nonzero)
+        #: closed-form rows fill the pattern they were given: kept only when widening it to
+        #: whole slots (:func:`.sparse.structure`) left it as it was
+        same = len(self.acol) == len(acol) and np.array_equal(self.acol, acol)
+        self.joints = joints if same else None
+        self.rows = np.repeat(np.arange(len(self.aptr) - 1), np.diff(self.aptr))
+        self.flat = self.rows * P.nv + self.acol
+        self.aval = np.zeros(len(self.acol))
         #: the last sparse_solve left λ (unique: no redundant rows) in F's LAM section
         self.lam_ok = False
-        self.I, self.io, self.F, self.fo = sparse.structure(P, aptr, acol)
+        #: A is the same everywhere (``aval`` set once, γ = 0)
+        self.constant = False
 
     def dense(self, nc, nv):
-        """A as a dense nc x nv array (from ``aval``)."""
+        """A as a dense nc x nv array (from ``aval``; kept for constant rows)."""
+        if self.constant and getattr(self, "_dense", None) is not None:
+            return self._dense.copy()
         A = np.zeros((nc, nv))
         np.add.at(A, (self.rows, self.acol), self.aval)
+        if self.constant:
+            self._dense = A.copy()
         return A
 
 
@@ -78,10 +89,17 @@ def pack(model, nc_max=None, views=True):
     pattern = joints[2:] if joints is not None else sparse.ltg_pattern(model)
     if pattern is None:
         return P
-    sp = SparseRows(P, *pattern, joints=None if joints is None else joints[:2])
-    if joints is None and not _pattern_holds(model, P, sp):
-        return P
+    sp = SparseRows(P, *pattern[:2], joints=None if joints is None else joints[:2],
+                    nonzero=pattern[2] if joints is not None else None)
+    if sp.joints is None:
+        held = _pattern_holds(model, P, sp)
+        if held is None:
+            return P
+        if held is not False:                  # the same A at every analysis state
+            sp.aval[:] = held
+            sp.constant = True
     P.sp = sp
+    P.gam0c = np.zeros(model.n_constraints)
     return P
 
 
@@ -98,9 +116,9 @@ def _dense_A(model, q):
     return model.cons.Cq() @ model.nodes.H(q)
 
 
-def _joints_agree(model, P, J, Jf, aptr, acol):
+def _joints_agree(model, P, J, Jf, aptr, acol, nonzero):
     """True when the closed-form rows equal Exudyn's Jacobian (C_q H) and γ its differences
-    at the analysis states; leaves the system's state as it found it."""
+    at the analysis states (and are zero where ``nonzero`` says they stay zero); leaves the system's state as it found it."""
     sd = model.sd
     keep = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()), sd.GetTime())
     nc, nv = model.n_constraints, model.nv
@@ -109,6 +127,8 @@ def _joints_agree(model, P, J, Jf, aptr, acol):
         for q, V in _states(model):
             aval, gam = np.zeros(len(acol)), np.zeros(nc)
             joint_rows(P.T, np.ascontiguousarray(q, float), np.ascontiguousarray(V, float), J, Jf, aval, gam)
+            if np.any(aval[~nonzero]):
+                return False
             A = np.zeros((nc, nv))
             np.add.at(A, (rows, acol), aval)
             Ad = _dense_A(model, q)
@@ -125,18 +145,25 @@ def _joints_agree(model, P, J, Jf, aptr, acol):
 
 
 def _pattern_holds(model, P, sp):
-    """True when Exudyn's Jacobian at the analysis states is zero outside sp's pattern."""
-    sd = model.sd
+    """None when Exudyn's Jacobian at the analysis states is nonzero outside sp's pattern;
+    else A's values in the pattern when they are the same at every analysis state (constant
+    rows: coordinate constraints between vector-space coordinates, not moving in time, so
+    γ = d/dt(A V) = 0), else False."""
+    sd, cons = model.sd, model.cons
     keep = np.array(sd.GetODE2Coordinates())
+    vals = []
     try:
-        for q, _ in _states(model):
+        for q, _ in _states(model) + [(model.nodes.moved(model.q0[:model.n2], np.ones(model.nv), 0.1), None)]:
             A = _dense_A(model, q)
+            vals.append(A.ravel()[sp.flat].copy())
             A.ravel()[sp.flat] = 0.0
             if np.abs(A).max() > 0.0:
-                return False
-        return True
+                return None
     finally:
         sd.SetODE2Coordinates(keep)
+    if cons.time_dependent or cons.nonholonomic or cons.velocity_rows or any(np.any(v != vals[0]) for v in vals):
+        return False
+    return vals[0]
 
 
 def sparse_values(model, P, q):
@@ -145,7 +172,7 @@ def sparse_values(model, P, q):
     sp = P.sp
     if sp.joints is not None:
         joint_rows(P.T, q, np.zeros(P.nv), sp.joints[0], sp.joints[1], sp.aval, P.gam)
-    else:
+    elif not sp.constant:
         model.sd.SetODE2Coordinates(q - model.ref)
         E = model.engine
         constraint_matrix(P.T, P.off, P.w, q, E.ae_jacobian_full(1.0, 1.0 if model.cons.nonholonomic else 0.0),
@@ -239,6 +266,8 @@ def f_compiled(model, P, q, V, t):
     if nc and sp is not None and sp.joints is not None:
         gam = P.gam
         joint_rows(T, q, V, sp.joints[0], sp.joints[1], sp.aval, gam)
+    elif nc and sp is not None and sp.constant:
+        gam = P.gam0c
     elif nc:
         td = cons.time_dependent
         if (td and not cons.exudyn_gt) or not cons.velocity_level:
@@ -266,7 +295,7 @@ def f_compiled(model, P, q, V, t):
     model.n_eval += 1
     Vd = np.empty(P.nv)
     if sp is not None:
-        if sp.joints is None:
+        if sp.joints is None and not sp.constant:
             constraint_matrix(T, off, w, q, E.ae_jacobian_full(1.0, 1.0 if cons.nonholonomic else 0.0), P.rows, P.A)
             np.take(P.A.ravel(), sp.flat, out=sp.aval)
         sp.lam_ok = sparse_solve(T, off, w, sp.I, sp.io, sp.F, sp.fo, sp.aval, P.Qbar, gam, Vd) == 0

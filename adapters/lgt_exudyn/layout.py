@@ -137,6 +137,34 @@ class NodeLayout:
         H[self.vq, self.vv] = 1.0
         return H
 
+    def H_sparse(self, q):
+        """H(q) as a scipy CSR matrix (a few entries per row: large models)."""
+        from scipy.sparse import csr_matrix
+        r, c, v = [self.pos_q.ravel(), self.vq], [self.lin_v.ravel(), self.vv], [np.ones(self.pos_q.size + len(self.vq))]
+        for typ, (rq, wv) in self.types.items():
+            B = self.rot_blocks(typ, q[rq])
+            r.append(np.broadcast_to(rq[:, :, None], B.shape).ravel())
+            c.append(np.broadcast_to(wv[:, None, :], B.shape).ravel())
+            v.append(B.ravel())
+        return csr_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(self.n2, self.nv))
+
+    def increments(self, q):
+        """∂q_e/∂(Exudyn's increments) as a scipy CSR matrix: the identity, except for the
+        rotation coordinates ν of RotVecLG nodes, whose increments are body-frame rotations
+        δθ (R(ν + dν) = R(ν) exp(δθ~), δθ = dexp₋ν dν): there dexp₋ν⁻¹."""
+        from scipy.sparse import csr_matrix, identity
+        if "RigidBodyRotVecLG" not in self.types:
+            return identity(self.n2, format="csr")
+        from lgt_bridge.groups import so3
+        rq, _ = self.types["RigidBodyRotVecLG"]
+        B = so3.dexp_inv(-q[rq])
+        keep = np.ones(self.n2, bool)
+        keep[rq.ravel()] = False
+        d = np.flatnonzero(keep)
+        r = np.concatenate([d, np.repeat(rq, 3, axis=1).ravel()])
+        c = np.concatenate([d, np.tile(rq, (1, 3)).ravel()])
+        return csr_matrix((np.concatenate([np.ones(len(d)), B.ravel()]), (r, c)), shape=(self.n2, self.n2))
+
     def H_pinv(self, q):
         """The pseudo-inverse of H(q), block by block (H is a permutation of per-node
         blocks: identities and each rotation's 4x3 or 3x3 block)."""

@@ -23,6 +23,9 @@ from .layout import NodeLayout
 from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
 from .ode1 import ODE1States
 
+#: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
+SPARSE_INVERSE_MIN = 100
+
 
 class ExudynModel(StepHooks, Model):
     """An assembled Exudyn ``MainSystem`` as a model for :func:`lgt_bridge.simulate`.
@@ -72,7 +75,7 @@ class ExudynModel(StepHooks, Model):
         #: the compiled kernels run this model's conversions (the backend is read here, once)
         self._compiled = _backend.compiled(backend) and self.nv > 0
         self._P = None                  # the kernels' pack (built at the first f)
-        self._Mbar_inv = None
+        self._Mbar_inv = self._Mbar_sparse = self._coloured = None
         self._Mbar_pd = None            # M̄ constant and positive definite (checked once)
         self.n_eval = 0
         sd = self.sd
@@ -257,12 +260,14 @@ class ExudynModel(StepHooks, Model):
     def _jacobian2(self, q):
         if not self.n_constraints:
             return np.zeros((0, self.nv))
+        if self._compiled and self._pack().sp is not None and self._P.sp.constant:
+            return self._P.sp.dense(self.n_constraints, self.nv)      # the same everywhere
         self.sd.SetODE2Coordinates(q - self.ref)
         if not self._compiled:
             return self.cons.Cq() @ self.nodes.H(q)
         P = self._pack()
         q = np.ascontiguousarray(q, float)
-        if P.sp is not None and P.sp.joints is not None:        # closed-form rows: no Exudyn Jacobian
+        if P.sp is not None and (P.sp.joints is not None or P.sp.constant):   # no Exudyn Jacobian
             self._kernels.sparse_values(self, P, q)
             return P.sp.dense(self.n_constraints, self.nv)
         A = np.empty((self.n_constraints, self.nv))
@@ -274,7 +279,13 @@ class ExudynModel(StepHooks, Model):
         if self.Mbar is None:
             return np.linalg.solve(self._mass2(q), B)
         if self._Mbar_inv is None:
-            self._Mbar_inv = np.linalg.inv(self.Mbar)
+            inv = None
+            if self.nv > SPARSE_INVERSE_MIN:               # block-diagonal: its blocks' inverses
+                from .kernel_tables import sparse_inverse
+                inv = sparse_inverse(self.Mbar)
+                if inv is not None and inv.nnz > self.nv * self.nv // 8:
+                    inv = inv.toarray()                      # hardly sparse (one flexible body)
+            self._Mbar_inv = inv if inv is not None else np.linalg.inv(self.Mbar)
         return self._Mbar_inv @ B
 
     # ------------------------------------------------------------------ model protocol
@@ -321,17 +332,27 @@ class ExudynModel(StepHooks, Model):
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
         not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
         for the calls at the same (q, V, t). ``sparse``: scipy.sparse matrices (products with
-        a sparse H: large models), as generalized-α asks above its sparse size."""
+        a sparse H: large models), as generalized-α asks above its sparse size; on large
+        models with a constant M̄ the Jacobians of Q_e then come from coloured differences
+        (:mod:`.iteration`) instead of Exudyn's dense system Jacobian."""
         key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
         cached = getattr(self, "_it_cache", None)
         if cached is None or cached[0] != key:
+            parts = None
+            if sparse and self._compiled:               # large models: no dense Jacobian transfer
+                from .iteration import sparse_parts
+                parts = sparse_parts(self, q, V, t)
+            if parts is not None:
+                cached = self._it_cache = (key, parts)
+                return combine_iteration(parts, c_acc, c_vel, c_pos)
             S, n2 = self.solver, self.n2
-            H = self.nodes.H(np.asarray(q, float))
+            # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
+            # threads, woken once per matrix under load, cost ~30 ms a call
+            H = self.nodes.H_sparse(np.asarray(q, float))
             Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
             self.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
             if sparse:
                 from scipy.sparse import csr_matrix as to
-                H = to(H)
             else:
                 def to(X):
                     return X
@@ -339,7 +360,8 @@ class ExudynModel(StepHooks, Model):
             for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
                 S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
                 J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
-                parts.append(-(H.T @ (J @ H)))
+                JH = J @ H if sparse else (H.T @ J.T).T                     # J H
+                parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
             cached = self._it_cache = (key, parts)
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
@@ -366,7 +388,17 @@ class ExudynModel(StepHooks, Model):
         return -self.cons.AV_at(q[:self.n2], np.zeros(self.nv), t)
 
     @engine_call
-    def constraint_jacobian(self, q):
+    def constraint_jacobian(self, q, sparse=False):
+        """A(q); ``sparse``: a scipy CSR matrix when the compiled backend holds the rows
+        sparse (generalized-α asks above its sparse size), else the dense array."""
+        if sparse and self._compiled and self.ode1 is None and self.n_constraints:
+            P = self._pack()
+            if P.sp is not None:
+                from scipy.sparse import csr_matrix
+                if P.sp.joints is None and not P.sp.constant:
+                    self.sd.SetODE2Coordinates(q - self.ref)
+                aval = self._kernels.sparse_values(self, P, np.ascontiguousarray(q, float))
+                return csr_matrix((aval.copy(), P.sp.acol, P.sp.aptr), shape=(self.n_constraints, self.nv))
         A = self._jacobian2(q[:self.n2])
         return A if self.ode1 is None else self.ode1.jacobian(A)
 
@@ -442,7 +474,7 @@ class ExudynModel(StepHooks, Model):
         it, the cached M̄⁻¹ and M̄'s definiteness): the next run pays what a run on a fresh
         model pays (benchmarks), and a system assembled again is packed again."""
         self._P = None
-        self._Mbar_inv = None
+        self._Mbar_inv = self._Mbar_sparse = self._coloured = None
         self._Mbar_pd = None
         self.__dict__.pop("f", None)
 

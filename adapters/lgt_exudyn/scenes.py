@@ -29,7 +29,9 @@ def heavy_top(node=EP, joint=True, R0=None, assemble=True):
 
 
 def chain(n=5, node=EP, joint="spherical"):
-    """n links along x from a ground joint, spinning about the vertical (as scenes.chain)."""
+    """n links along x from a ground joint, spinning about the vertical (as scenes.chain);
+    ``joint``: "spherical" (CreateSphericalJoint), "revolute" (CreateRevoluteJoint, about y:
+    JointRevoluteZ) or "generic" (CreateGenericJoint, revolute about y)."""
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.AddObject(ObjectGround())
@@ -41,6 +43,8 @@ def chain(n=5, node=EP, joint="spherical"):
                                 initialAngularVelocity=[0, 0, spin], initialVelocity=[0, spin * x, 0], gravity=G)
         if joint == "spherical":
             mbs.CreateSphericalJoint(itemNumbers=[prev, b], position=[float(k), 0, 0])
+        elif joint == "generic":            # revolute about y as a generic joint
+            mbs.CreateGenericJoint(itemNumbers=[prev, b], position=[float(k), 0, 0], constrainedAxes=[1, 1, 1, 1, 0, 1])
         else:
             mbs.CreateRevoluteJoint(itemNumbers=[prev, b], position=[float(k), 0, 0], axis=[0, 1, 0])
         prev = b
@@ -85,3 +89,22 @@ def free_bodies(n=8, node=ROTVEC, seed=0):
     mbs.Assemble()
     return SC, mbs
 
+
+
+def ancf_pendulum(n=25, L=2.0, EI=1.0, rhoA=1.0):
+    """A flexible pendulum as Exudyn's examples build it: n ObjectANCFCable2D elements
+    (reduced integration, axial stiffness 1e4 EI) along x from a pinned end
+    (``GenerateStraightLineANCFCable2D`` with fixedConstraintsNode0=[1, 1, 0, 0]: two
+    CoordinateConstraints), falling under gravity along -y; 4 (n + 1) coordinates."""
+    from exudyn.beams import GenerateStraightLineANCFCable2D
+    from exudyn.utilities import ObjectANCFCable2D
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    mbs.AddObject(ObjectGround())
+    cable = ObjectANCFCable2D(physicsMassPerLength=rhoA, physicsBendingStiffness=EI,
+                              physicsAxialStiffness=EI * 1e4, useReducedOrderIntegration=True)
+    GenerateStraightLineANCFCable2D(mbs, positionOfNode0=[0, 0, 0], positionOfNode1=[L, 0, 0], numberOfElements=n,
+                                    cableTemplate=cable, massProportionalLoad=[0, -9.81, 0],
+                                    fixedConstraintsNode0=[1, 1, 0, 0], fixedConstraintsNode1=[0, 0, 0, 0])
+    mbs.Assemble()
+    return SC, mbs

@@ -91,6 +91,9 @@ class GenAlpha(Stepper):
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
         self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
         self._sparse_kw = self.analytic and accepts(m.iteration_matrix, "sparse")
+        # large models: A as a scipy.sparse matrix where the model gives one
+        self._sparse_A = bool(self.nc and problem.layout.nv + self.nc > SPARSE_MIN
+                              and accepts(m.constraint_jacobian, "sparse"))
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
         self._to_local = problem.local_index
@@ -187,7 +190,7 @@ class GenAlpha(Stepper):
             self._finite = math.isfinite(prob.ga_residual(m.f(q1, V1, t1), Wd1, r, W1, quats))
             return r
         q1, V1, quats, W1 = q1.copy(), V1.copy(), quats.copy(), W1.copy()
-        A = m.constraint_jacobian(q1)
+        A = self._A(q1)
         Q = m.forces(q1, V1, t1) - A.T @ lam
         if self.accel_form:
             Rd = Wd1 - prob.group_acceleration(m.solve_mass(q1, Q), W1, quats)
@@ -199,6 +202,11 @@ class GenAlpha(Stepper):
         self._finite = bool(np.isfinite(r).all())
         return r
 
+    def _A(self, q1):
+        """The model's constraint Jacobian at q1 (scipy.sparse on large models that give it)."""
+        m = self.prob.model
+        return m.constraint_jacobian(q1, sparse=True) if self._sparse_A else m.constraint_jacobian(q1)
+
     def _constraint_rows(self, q1, V1, t1, h):
         """g(q, t)/(h²β) on position rows, (A V - b)/(h γ k) on velocity-level rows (their
         Jacobian in Ẇ is then A, like the position rows' A Z/(h²β))."""
@@ -207,7 +215,7 @@ class GenAlpha(Stepper):
         if self._vel_rows is None:
             return g
         vr = self._vel_rows
-        Av = m.constraint_jacobian(q1)[vr] @ V1
+        Av = self._A(q1)[vr] @ V1
         b = m.velocity_rhs(q1, t1)
         if b is not None:
             Av = Av - b[vr]
@@ -256,7 +264,7 @@ class GenAlpha(Stepper):
         else:
             lparts = None if Pt is None else [Pt.triples()]
         if nc:
-            Ar, Ac, Av = coo(m.constraint_jacobian(q1))
+            Ar, Ac, Av = coo(self._A(q1))
             parts.append((Ac, Ar + n, Av))                                         # Aᵀ
             pos = np.ones(len(Ar), bool)
             if self._vel_rows is not None:

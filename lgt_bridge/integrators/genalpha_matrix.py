@@ -188,7 +188,7 @@ def factorize(J, L=None, compiled=False):
     A J that falls apart into independent blocks of at most BLOCK_MAX unknowns (bodies
     that do not interact) is inverted block by block and J⁻¹L applied as one sparse
     product (a sparse triangular solve costs more than that); otherwise sparse LU above
-    SPARSE_MIN unknowns, dense LU below; a dense J of at most DENSE_MAX unknowns goes straight
+    SPARSE_MIN unknowns or for a sparse J under a quarter full, dense LU below; a dense J of at most DENSE_MAX unknowns goes straight
     to dense LU (and J⁻¹L is formed once). Raises np.linalg.LinAlgError or RuntimeError on
     a singular J. ``compiled``: the block product runs in a kernel (scipy's matrix-vector
     product costs ~3 µs a call, most of a Newton iteration's own work on 100 bodies)."""
@@ -197,7 +197,9 @@ def factorize(J, L=None, compiled=False):
     S = None if dense else _block_inverse(sparse.csr_matrix(J), L)
     if S is not None:
         return _csr_product(S) if compiled else S.__matmul__
-    if J.shape[0] > SPARSE_MIN:
+    if J.shape[0] > SPARSE_MIN or (sparse.issparse(J) and 4 * J.nnz < J.shape[0] ** 2):
+        # (a sparse J of a moderate size too: a dense J⁻¹L is a threaded BLAS-3 solve,
+        # whose threads cost ~10 ms a call under load)
         from scipy.sparse.linalg import splu
         solve = splu(sparse.csc_matrix(J)).solve
         if L is None:

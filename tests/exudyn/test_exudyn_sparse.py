@@ -1,6 +1,8 @@
 """The sparse constraint rows of the Exudyn adapter (lgt_exudyn.sparse, lgt_exudyn.kernel_sparse)
-against independent references, on chains, a tree and a closed loop of spherical joints and on
-the joint models of tests/models: the closed-form A equals Exudyn's own Jacobian mapped to
+against independent references, on chains, a tree and a closed loop of spherical joints, on
+chains of generic joints (every kind of constrainedAxes, revolute-z and prismatic-x joints),
+on the joint models of tests/models and on two models whose rows are gathered from Exudyn's
+Jacobian (a node marker on a point mass, alternativeConstraints): the closed-form A equals Exudyn's own Jacobian mapped to
 twists (C_q H) to rounding; the closed-form γ equals Richardson-extrapolated differences of
 A(τ(q, sV)) V with Exudyn's Jacobian; the sparse index-1 solve equals the dense range-space
 solve (lgt_bridge.model.solve_kkt), redundant rows included; the envelope of the reordered
@@ -32,14 +34,26 @@ SPHERICAL = {
     "loop EP": lambda: em.spherical_loop(em.EP),
     "loop RotVecLG": lambda: em.spherical_loop(em.ROTVEC),
 }
-#: other joints: A from Exudyn's dense Jacobian gathered into the objects' pattern
-GATHERED = {
+#: generic (every kind of constrainedAxes), revolute-z and prismatic-x joints: closed form too
+JOINTS = {
     "revolute chain EP": lambda: scenes.chain(6, em.EP, joint="revolute"),
+    "revolute chain RotVecLG": lambda: scenes.chain(4, em.ROTVEC, joint="revolute"),
+    "generic chain EP": lambda: em.generic_chain(em.EP),
+    "generic chain RotVecLG": lambda: em.generic_chain(em.ROTVEC),
+    "generic chain Rxyz": lambda: em.generic_chain(em.RXYZ),
     "generic double pendulum": lambda: (None, jm.generic_double_pendulum(em.EP)),
-    "four-bar (redundant rows)": lambda: (None, jm.fourbar(em.EP)),
+    "slider pendulum (inactive row)": lambda: (None, jm.slider_pendulum(em.EP)),
+    "four-bar": lambda: (None, jm.fourbar(em.EP)),
     "slider-crank": lambda: (None, jm.slider_crank(em.EP)),
     "Bricard loop": lambda: (None, jm.bricard(em.EP)),
 }
+CLOSED = {**SPHERICAL, **JOINTS}
+#: other rows: A from Exudyn's dense Jacobian gathered into the objects' pattern
+GATHERED = {
+    "point mass on a node marker": lambda: em.point_mass_on_joint(em.EP),
+    "welded by alternativeConstraints": lambda: em.welded_pair(em.EP),
+}
+TABLES = {**CLOSED, **GATHERED}
 
 
 def build(table, name):
@@ -76,9 +90,9 @@ def closed_form(m, P, q, V):
     return A, gam
 
 
-@pytest.mark.parametrize("name", list(SPHERICAL))
+@pytest.mark.parametrize("name", list(CLOSED))
 def test_closed_form_rows_equal_exudyns_jacobian_and_gamma_its_differences(name, rng):
-    _, m, P = build(SPHERICAL, name)
+    _, m, P = build(CLOSED, name)
     assert P.sp is not None and P.sp.joints is not None
     for q, V, t in states(m, rng):
         A, gam = closed_form(m, P, q, V)
@@ -92,10 +106,9 @@ def test_closed_form_rows_equal_exudyns_jacobian_and_gamma_its_differences(name,
         assert close(gam, ref, 1e-8)
 
 
-@pytest.mark.parametrize("name", list(SPHERICAL) + list(GATHERED))
+@pytest.mark.parametrize("name", list(TABLES))
 def test_sparse_solve_equals_the_dense_kkt_solve(name, rng):
-    table = SPHERICAL if name in SPHERICAL else GATHERED
-    _, m, P = build(table, name)
+    _, m, P = build(TABLES, name)
     sp = P.sp
     assert sp is not None and (sp.joints is None) == (name in GATHERED)
     for q, V, t in states(m, rng, 2):
@@ -111,10 +124,9 @@ def test_sparse_solve_equals_the_dense_kkt_solve(name, rng):
         assert close(sp.F[sp.fo[3]:sp.fo[4]], lam, 10 * tol)     # λ in the model's row order
 
 
-@pytest.mark.parametrize("name", list(SPHERICAL) + list(GATHERED))
+@pytest.mark.parametrize("name", list(TABLES))
 def test_f_equals_the_numpy_backend(name, rng):
-    table = SPHERICAL if name in SPHERICAL else GATHERED
-    out, m, P = build(table, name)
+    out, m, P = build(TABLES, name)
     ref = ExudynModel(m.mbs, backend="numpy")
     for q, V, t in states(m, rng, 2):
         V = 0.3 * V
@@ -169,14 +181,14 @@ def test_unknown_joints_keep_the_dense_path():
     assert P.sp is None
 
 
-@pytest.mark.parametrize("name", ["chain EP", "loop RotVecLG", "revolute chain EP"])
+@pytest.mark.parametrize("name", ["chain EP", "loop RotVecLG", "revolute chain EP", "generic chain EP",
+                                  "point mass on a node marker"])
 def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, rng):
     """The projections' step (Model.constraint_schur) and the Lagrange multipliers written for
     Exudyn's sensors, from the sparse rows, against the dense defaults (lgt_bridge.model's
     dense constraint_schur, the least-squares multipliers of the numpy backend)."""
     from lgt_bridge.model import Model
-    table = SPHERICAL if name in SPHERICAL else GATHERED
-    _, m, P = build(table, name)
+    _, m, P = build(TABLES, name)
     ref = ExudynModel(m.mbs, backend="numpy")
     for q, V, t in states(m, rng, 2):
         A, correct = m.constraint_schur(q)

@@ -107,3 +107,78 @@ def spherical_loop(node=EP):
     _spherical(mbs, bars[2], None, P[3], (ground,))
     mbs.Assemble()
     return SC, mbs
+
+
+#: constrainedAxes of the generic joints of :func:`generic_chain`: revolute about z and about
+#: x, universal, free translations in the joint frame (with 3, 2 and 1 rotations locked), a ball
+GENERIC_AXES = ([1, 1, 1, 1, 1, 0], [1, 1, 1, 0, 1, 1], [1, 1, 1, 1, 0, 0], [0, 1, 1, 1, 1, 1],
+                [1, 0, 1, 1, 0, 1], [1, 1, 0, 0, 1, 0], [1, 1, 1, 0, 0, 0])
+
+
+def generic_chain(node=EP, axes=GENERIC_AXES, extra=True):
+    """An open chain of bars on generic joints (CreateGenericJoint, one ``axes`` pattern each,
+    their frames tilted by rotationMatrixAxes), hung from a ground object placed and turned
+    away from the origin with the ground as the joint's second item; ``extra``: a revolute
+    (CreateRevoluteJoint: JointRevoluteZ) and a prismatic joint (CreatePrismaticJoint:
+    JointPrismaticX) further down. Not at rest, not consistent with its joints (A and γ are
+    defined everywhere)."""
+    from exudyn.utilities import RotationMatrixX, RotationMatrixZ
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround(referencePosition=[0.3, -0.2, 0.1],
+                                        referenceRotation=RotationMatrixZ(0.4) @ RotationMatrixX(0.3)))
+    a = np.zeros(3)
+    d = np.array([0.8, 0.3, -0.4])
+    prev = ground
+    for k, ax in enumerate(list(axes) + ([None, None] if extra else [])):
+        b = a + d
+        bar, _ = _bar(mbs, a, b, node, spin=0.4 * k - 1.0)
+        if ax is None and k == len(axes):
+            mbs.CreateRevoluteJoint(itemNumbers=[prev, bar], position=list(a), axis=[0.2, 0.3, 1.0])
+        elif ax is None:
+            mbs.CreatePrismaticJoint(itemNumbers=[prev, bar], position=list(a), axis=list(d))
+        else:
+            items = [bar, prev] if prev == ground else [prev, bar]
+            mbs.CreateGenericJoint(itemNumbers=items, position=list(a), constrainedAxes=ax,
+                                   rotationMatrixAxes=RotationMatrixX(0.3 * k) @ RotationMatrixZ(0.2))
+        prev, a = bar, b
+        d = np.array([d[1], -d[2], d[0]]) * 0.9
+    mbs.Assemble()
+    return SC, mbs
+
+
+def point_mass_on_joint(node=EP):
+    """A bar on a spherical joint to the ground with a point mass (NodePoint, MassPoint) held
+    at its tip by a spherical joint on a node marker: rows on vector-space coordinates."""
+    from exudyn.utilities import ObjectJointSpherical
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    bar, _ = _bar(mbs, [0, 0, 0], [1.0, 0.2, -0.3], node, spin=1.0)
+    mbs.CreateSphericalJoint(itemNumbers=[ground, bar], position=[0, 0, 0])
+    nP = mbs.AddNode(NodePoint(referenceCoordinates=[1.0, 0.2, -0.3], initialVelocities=[0.0, 0.5, 0.0]))
+    mbs.AddObject(MassPoint(mass=0.5, nodeNumber=nP))
+    mP = mbs.AddMarker(MarkerNodePosition(nodeNumber=nP))
+    mT = mbs.AddMarker(MarkerBodyPosition(bodyNumber=bar, localPosition=[0.5 * np.linalg.norm([1.0, 0.2, -0.3]), 0, 0]))
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[mT, mP]))
+    mbs.AddLoad(LoadForceVector(markerNumber=mP, loadVector=[0, 0, -0.5 * 9.81]))
+    mbs.Assemble()
+    return SC, mbs
+
+
+def welded_pair(node=EP):
+    """Two bars, the first on a spherical joint to the ground, the second welded to it by a
+    generic joint with every axis locked and ``alternativeConstraints`` (rotation rows the
+    kernels do not write in closed form)."""
+    from exudyn.utilities import GenericJoint
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    b1, _ = _bar(mbs, [0, 0, 0], [1.0, 0.0, -0.2], node, spin=1.0)
+    b2, _ = _bar(mbs, [1.0, 0.0, -0.2], [1.5, 0.6, -0.4], node, spin=1.0)
+    mbs.CreateSphericalJoint(itemNumbers=[ground, b1], position=[0, 0, 0])
+    m1 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b1, localPosition=[0.5 * np.hypot(1.0, 0.2), 0, 0]))
+    m2 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b2, localPosition=[-0.5 * np.linalg.norm([0.5, 0.6, -0.2]), 0, 0]))
+    mbs.AddObject(GenericJoint(markerNumbers=[m1, m2], constrainedAxes=[1, 1, 1, 1, 1, 1], alternativeConstraints=True))
+    mbs.Assemble()
+    return SC, mbs

@@ -1,0 +1,172 @@
+"""generalized-α's Newton parts of :class:`lgt_exudyn.ExudynModel` on large models without
+Exudyn's dense system Jacobian (whose transfer to Python, ~8 ms for 1100 coordinates, is
+most of a step there): the Jacobians of Exudyn's ODE2 right-hand side Q_e by central
+differences over colour groups of coordinates.
+
+Q_e's pattern is the union over the objects without algebraic equations (bodies, springs,
+connectors; the joints' forces Aᵀλ are not part of Q_e) of (their ODE2 coordinates)². Two
+coordinates that no row of Q_e reads together get one colour (a greedy colouring of PᵀP),
+so a group is moved at once and its columns read off the rows they touch: a chain of rigid
+bodies needs 7 groups (one node's coordinates) whatever its length. Each Jacobian costs
+2 × (groups) evaluations of Q_e through Exudyn's writable views, instead of one dense
+transfer. At the analysis (the first call) the pattern is checked against Exudyn's own
+Jacobians (ComputeJacobianODE2RHS: no entry outside it) and a column of each group against
+its own difference; a model that fails (an object the pattern misses) keeps Exudyn's dense
+Jacobians.
+
+* :class:`ColouredJacobian` (model): ``jacobians(q, qd, t)`` -> (∂Q_e/∂q_e, ∂Q_e/∂q̇_e) as
+  scipy CSR matrices, and ``agrees`` (the analysis' verdict);
+* :func:`sparse_parts` (model, q, V, t): (M̄, C_t, K_t) of ``iteration_matrix`` as
+  scipy.sparse matrices from them, or None when the model keeps the dense path.
+"""
+import numpy as np
+
+#: coordinates above which the sparse iteration matrix takes the coloured differences
+#: instead of Exudyn's dense Jacobian (whose transfer grows with their square)
+COLOURED_MIN = 300
+#: the relative step of the central differences (∛eps: truncation and rounding balanced)
+STEP = 6e-6
+#: the coloured Jacobians are used when they equal Exudyn's to this, relative to their largest entry
+CHECK = 1e-5
+
+
+def _pattern(model):
+    """Q_e's structural pattern (scipy CSR, n2 x n2, boolean)."""
+    from scipy.sparse import coo_matrix
+    sd, n2 = model.sd, model.n2
+    rows, cols = [], []
+    node_ae = set(int(i) for i in model.nodes.ep_ae)
+    for k in range(sd.NumberOfObjects()):
+        try:
+            if set(int(i) for i in sd.GetObjectLTGAE(k)) - node_ae:
+                continue                                   # constraints: no part in Q_e
+        except Exception:
+            pass
+        try:
+            idx = np.asarray(sd.GetObjectLTGODE2(k), np.int64)
+        except Exception:
+            continue
+        if len(idx):
+            rows.append(np.repeat(idx, len(idx)))
+            cols.append(np.tile(idx, len(idx)))
+    r = np.concatenate(rows + [np.zeros(0, np.int64)])
+    c = np.concatenate(cols + [np.zeros(0, np.int64)])
+    return coo_matrix((np.ones(len(r), bool), (r, c)), shape=(n2, n2)).tocsr()
+
+
+def _colours(P):
+    """A greedy colouring of the columns of P: columns sharing a row get different colours."""
+    n = P.shape[1]
+    G = (P.T.astype(np.int8) @ P.astype(np.int8)).tocsr()
+    colour = np.full(n, -1, np.int64)
+    for j in range(n):
+        used = {int(colour[k]) for k in G.indices[G.indptr[j]:G.indptr[j + 1]] if colour[k] >= 0}
+        c = 0
+        while c in used:
+            c += 1
+        colour[j] = c
+    return colour
+
+
+class ColouredJacobian:
+    """Exudyn's ODE2 right-hand side's Jacobians by central differences over colour groups
+    (the module docstring)."""
+
+    def __init__(self, model):
+        self.model = model
+        P = _pattern(model).tocoo()
+        self.rows, self.cols = P.row.astype(np.int64), P.col.astype(np.int64)
+        self.colour = _colours(P.tocsr())
+        self.groups = [np.flatnonzero(self.colour == c) for c in range(int(self.colour.max(initial=-1)) + 1)]
+        self.agrees = None
+
+    def _residual(self):
+        S, mbs, n2 = self.model.solver, self.model.mbs, self.model.n2
+        S.ComputeODE2RHS(mbs)
+        return np.array(S.GetSystemResidual())[:n2]
+
+    def _derivative(self, x, base):
+        """∂Q_e/∂x for the writable view x (current ODE2 coordinates or their rates) around its
+        value ``base``: CSR on the pattern."""
+        from scipy.sparse import csr_matrix
+        n2 = self.model.n2
+        d = np.empty(len(self.rows))
+        for g in self.groups:
+            e = STEP * np.maximum(1.0, np.abs(base[g]))
+            x[g] = base[g] + e
+            rp = self._residual()
+            x[g] = base[g] - e
+            rm = self._residual()
+            x[g] = base[g]
+            sel = self.colour[self.cols] == self.colour[g[0]]
+            step = np.zeros(n2)
+            step[g] = 2.0 * e
+            d[sel] = (rp[self.rows[sel]] - rm[self.rows[sel]]) / step[self.cols[sel]]
+        return csr_matrix((d, (self.rows, self.cols)), shape=(n2, n2))
+
+    def jacobians(self, q, qd, t):
+        """(∂Q_e/∂q_e, ∂Q_e/∂q̇_e) at (q total, q̇, t) as scipy CSR; the system is left at
+        (q, q̇, t)."""
+        m = self.model
+        m.engine.write(q, qd, t)
+        sd = m.sd
+        xq = sd.GetODE2Coordinates(copy=False)
+        xv = sd.GetODE2Coordinates_t(copy=False)
+        Jq = self._derivative(xq, np.array(xq))
+        Jv = self._derivative(xv, np.array(xv))
+        return Jq, Jv
+
+    def check(self, q, qd, t):
+        """True when the pattern holds Exudyn's own Jacobians (zero outside it) and one column
+        of each colour group equals its own central difference (every row: a coupling the
+        pattern misses would show there) to CHECK, at (q, q̇, t). Exudyn's values are not the
+        reference: its ∂Q_e/∂q leaves terms out (a spring-loaded body: 5e-4 of the largest
+        entry against differences of its own Q_e, which these match to 1e-11)."""
+        m = self.model
+        S, n2 = m.solver, m.n2
+        got = self.jacobians(q, qd, t)
+        for fq, fv in ((1.0, 0.0), (0.0, 1.0)):
+            S.ComputeJacobianODE2RHS(m.mbs, fq, fv, 1.0, 2)
+            ref = np.array(S.GetSystemJacobian())[:n2, :n2]
+            ref[self.rows, self.cols] = 0.0
+            if np.abs(ref).max(initial=0.0) > 0.0:
+                return False
+        sd = m.sd
+        for x, J in ((sd.GetODE2Coordinates(copy=False), got[0]), (sd.GetODE2Coordinates_t(copy=False), got[1])):
+            base = np.array(x)
+            scale = max(1.0, float(np.abs(J.data).max(initial=0.0)))
+            for g in self.groups:
+                j = int(g[0])
+                e = STEP * max(1.0, abs(base[j]))
+                x[j] = base[j] + e
+                rp = self._residual()
+                x[j] = base[j] - e
+                rm = self._residual()
+                x[j] = base[j]
+                if np.abs((rp - rm) / (2.0 * e) - J[:, [j]].toarray()[:, 0]).max() > CHECK * scale:
+                    return False
+        return True
+
+
+def sparse_parts(model, q, V, t):
+    """(M̄, C_t, K_t) of ``iteration_matrix`` as scipy.sparse matrices from the coloured
+    Jacobians (C_t = -Hᵀ (∂Q_e/∂q̇_e) H, K_t = -Hᵀ (∂Q_e/∂q_e) H with ∂q_e in Exudyn's
+    increments, body-frame rotations on RotVecLG nodes), or None when the model
+    takes Exudyn's dense Jacobians (small, no constant M̄, or the analysis disagreed)."""
+    from scipy.sparse import csr_matrix
+    if model.n2 < COLOURED_MIN or model.Mbar is None or model.ode1 is not None:
+        return None
+    cj = getattr(model, "_coloured", None)
+    q = np.asarray(q, float)
+    H = model.nodes.H_sparse(q)
+    qd = H @ np.asarray(V, float)
+    if cj is None:
+        cj = model._coloured = ColouredJacobian(model)
+        cj.agrees = cj.check(q, qd, t)
+    if not cj.agrees:
+        return None
+    Jq, Jv = cj.jacobians(q, qd, t)
+    Jq = Jq @ model.nodes.increments(q)            # in Exudyn's increments, as its own Jacobian
+    if model._Mbar_sparse is None:
+        model._Mbar_sparse = csr_matrix(model.Mbar)
+    return [model._Mbar_sparse, -(H.T @ (Jv @ H)), -(H.T @ (Jq @ H))]
