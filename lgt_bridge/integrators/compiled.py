@@ -11,6 +11,7 @@ import contextlib
 
 import numpy as np
 
+from ..kernels import entry_point
 from ..kernels import stage as _k
 from ..kernels.rotations import PARAM_CODES
 from .local import LocalProblem
@@ -19,6 +20,9 @@ _NONE = np.zeros(0)
 _QUIET = contextlib.nullcontext()
 _F64 = np.dtype(np.float64)
 _NDARRAY = np.ndarray
+#: the stage and step-end kernels without type dispatch, for the steppers' own buffers
+#: (float64, C-contiguous) and a V̇ checked float64 and 1-D
+_STAGE, _STEP_END = entry_point(_k.stage), entry_point(_k.step_end)
 
 
 class CompiledProblem(LocalProblem):
@@ -184,8 +188,8 @@ class CompiledProblem(LocalProblem):
             return c
         Vd = self.model.f(self._q, self._V, ts)
         self.n_f += 1
-        if type(Vd) is not np.ndarray or Vd.dtype is not _F64:     # (other layouts: numba adapts)
-            Vd = np.ascontiguousarray(Vd, dtype=float)
+        if type(Vd) is not np.ndarray or Vd.dtype is not _F64 or Vd.ndim != 1:
+            Vd = np.ascontiguousarray(Vd, dtype=float).reshape(-1)
         self._vd = Vd
         self._pending = (i, t, ts)
         self._h = h
@@ -224,11 +228,13 @@ class CompiledProblem(LocalProblem):
         """Stages i0, ..., len(c) - 1 of the step from t (the explicit steppers' loop, as
         ``stage`` for each): one kernel call and the model's f per stage, the names bound
         once. Returns 0.0, or the chart usage of the first stage beyond ``climit`` (its f
-        not called); the last stage's V̇ is converted by :meth:`end_step` or :meth:`end`."""
+        not called); the last stage's V̇ is converted by :meth:`end_step` or :meth:`end`.
+        KX, KW: the stepper's stage buffers (float64, C-contiguous: the kernel is called
+        without type checks), A's rows float64 vectors."""
         if W0 is not self._W0_src:
             self._W0[:] = W0
             self._W0_src = W0
-        kern, f, w, I, q, V = _k.stage, self.model.f, self.work, self._I, self._q, self._V
+        kern, f, w, I, q, V = _STAGE, self.model.f, self.work, self._I, self._q, self._V
         vd, n = self._vd, 0
         try:
             for i in range(i0, len(c)):
@@ -242,8 +248,8 @@ class CompiledProblem(LocalProblem):
                     return cm
                 vd = f(q, V, t + c[i] * h)
                 n += 1
-                if vd.__class__ is not _NDARRAY or vd.dtype is not _F64:   # (other layouts: numba adapts)
-                    vd = np.ascontiguousarray(vd, dtype=float)
+                if vd.__class__ is not _NDARRAY or vd.dtype is not _F64 or vd.ndim != 1:
+                    vd = np.ascontiguousarray(vd, dtype=float).reshape(-1)
         finally:
             self.n_f += n
         self._vd = vd
@@ -260,7 +266,7 @@ class CompiledProblem(LocalProblem):
             self._W0_src = W0
         vd = self._vd
         i = self._pending[0] + 1 if len(vd) else T.shape[1]
-        st, s5, s3, num, den, sq = _k.step_end(vd, KX, KW, T, i, h, self.work, self._I, rtol, atol)
+        st, s5, s3, num, den, sq = _STEP_END(vd, KX, KW, T, i, h, self.work, self._I, rtol, atol)
         if st < 0.0:
             self._failed(KX, KW)
         self._vd = _NONE
