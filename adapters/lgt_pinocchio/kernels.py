@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lgt_bridge.kernels import guard_cache
+from lgt_bridge.kernels import entry_point, guard_cache
 from lgt_bridge.kernels.rotations import cross, rotate, to_quat
 
 guard_cache(__file__)
@@ -116,18 +116,5 @@ def vdot_from_a(jt, W, a):
             a[iv + 2] = c2 * c1 * aa - s2 * ab + (-s2 * c1 * cd - c2 * s1 * bd) * ad - c2 * cd * bd
 
 
-def _entry(kernel):
-    """The compiled entry point of a kernel with one explicit signature: the call without
-    numba's type dispatch (≈ 0.15 µs less). It does not check dtype or layout, so it is only
-    for arguments whose types the caller guarantees. The dispatcher itself where numba
-    keeps no such entry (NUMBA_DISABLE_JIT=1, other numba versions)."""
-    try:
-        (cres,) = kernel.overloads.values()
-        entry = cres.entry_point
-    except (AttributeError, ValueError):
-        return kernel
-    return entry if callable(entry) else kernel
-
-
 #: vdot_from_a for the model's own arrays (jt, W, and the float64 vector Pinocchio returns)
-vdot_from_a_unchecked = _entry(vdot_from_a)
+vdot_from_a_unchecked = entry_point(vdot_from_a)

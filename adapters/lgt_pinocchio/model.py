@@ -30,7 +30,7 @@ from lgt_bridge.model import Model, combine_iteration
 
 from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, jacobian_fd
 from .iteration import iteration_parts
-from .joints import Joints
+from .joints import model_memo
 from .loads import Loads
 from .rhs import build_f, f_numpy
 
@@ -169,9 +169,11 @@ class PinocchioModel(Model):
         pin = self.pin = _pin()
         _check_pin_model(pin, model)
         self.backend = _backend.name(backend)
-        self.model, self.data = model, model.createData()
+        # (pin.Data(model) builds the same Data as model.createData() in about half the time)
+        self.model, self.data = model, pin.Data(model)
         self.nq, self.nv = model.nq, model.nv
-        self.joints = Joints(model)
+        self._memo = model_memo(pin, model)
+        self.joints = self._memo["joints"]
         self.layout = self.joints.layout
         if self.joints.zyx:
             # generalized-α's analytic matrix has no blocks for G(q)⁻¹: it differences the step
@@ -316,6 +318,12 @@ class PinocchioModel(Model):
         :func:`lgt_bridge.simulate.simulate` before the first step."""
         from lgt_bridge.validation import mass_defects
         q = np.asarray(q, float)
+        # a model wrapped afresh for each run is checked once per configuration while the
+        # pinocchio.Model is unchanged (model_memo compares it with a copy)
+        memo = self._memo if not self.n_constraints else None
+        key = q.tobytes()
+        if memo is not None and key in memo["mass_ok"] and self.model == memo["copy"]:
+            return
         M = self._crba(q)
         A = None
         if self.n_constraints:
@@ -323,6 +331,8 @@ class PinocchioModel(Model):
             A = np.linalg.solve(self.joints.T(q).T, self.constraint_jacobian(q).T).T
         defects = mass_defects(M, A)
         if not defects:
+            if memo is not None and len(memo["mass_ok"]) < 64 and self.model == memo["copy"]:
+                memo["mass_ok"].add(key)
             return
         i, lam = defects[0]
         names = list(dict.fromkeys(self.joint_of("v", k) for k, _ in defects))

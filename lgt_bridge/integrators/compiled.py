@@ -11,6 +11,7 @@ import contextlib
 
 import numpy as np
 
+from ..kernels import entry_point
 from ..kernels import stage as _k
 from ..kernels.rotations import PARAM_CODES
 from .local import LocalProblem
@@ -18,6 +19,10 @@ from .local import LocalProblem
 _NONE = np.zeros(0)
 _QUIET = contextlib.nullcontext()
 _F64 = np.dtype(np.float64)
+_NDARRAY = np.ndarray
+#: the stage and step-end kernels without type dispatch, for the steppers' own buffers
+#: (float64, C-contiguous) and a V̇ checked float64 and 1-D
+_STAGE, _STEP_END = entry_point(_k.stage), entry_point(_k.step_end)
 
 
 class CompiledProblem(LocalProblem):
@@ -54,6 +59,8 @@ class CompiledProblem(LocalProblem):
         a["_slices"] = [(off[k], off[k] + n) for k, n in ((_k.OX, nX), (_k.OW, nv), (_k.OQ, nq), (_k.OV, nv),
                                                           (_k.OW0, nv), (_k.OQK, nq), (_k.OXD, nX))]
         a["_quat_slices"] = [(off[k], off[k] + 4 * nb) for k in (_k.OPK, _k.OP)]
+        a["_I"] = _k.pack_tables(a["bt"], a["vt"], a["off"])
+        a["_n_end"] = off[_k.OW0]                 # X, W, q, V: the work array's first entries
         a["_one"] = np.ones(1)
         a["_zK"] = np.zeros((2, max(nX, nv)))
         a["_zv"], a["_zx"] = np.zeros(nv), np.zeros(nX)     # (rates: no affine part)
@@ -173,7 +180,7 @@ class CompiledProblem(LocalProblem):
         if W0 is not self._W0_src:                 # (_w0, inlined: this runs once per stage)
             self._W0[:] = W0
             self._W0_src = W0
-        c = _k.stage(_NONE if i == 0 else self._vd, KX, KW, a, i, h, self.work, self.bt, self.vt, self.off)
+        c = _k.stage(_NONE if i == 0 else self._vd, KX, KW, a, i, h, self.work, self._I)
         if c < 0.0:
             self._failed(KX, KW)
         self._vd = _NONE                          # consumed (a failing f leaves nothing pending)
@@ -181,8 +188,8 @@ class CompiledProblem(LocalProblem):
             return c
         Vd = self.model.f(self._q, self._V, ts)
         self.n_f += 1
-        if type(Vd) is not np.ndarray or Vd.dtype is not _F64:     # (other layouts: numba adapts)
-            Vd = np.ascontiguousarray(Vd, dtype=float)
+        if type(Vd) is not np.ndarray or Vd.dtype is not _F64 or Vd.ndim != 1:
+            Vd = np.ascontiguousarray(Vd, dtype=float).reshape(-1)
         self._vd = Vd
         self._pending = (i, t, ts)
         self._h = h
@@ -197,25 +204,75 @@ class CompiledProblem(LocalProblem):
         """Convert the last stage's V̇ (the fused kernel defers it to the next call)."""
         if len(self._vd):
             i = self._pending[0]
-            if _k.stage(self._vd, KX, KW, _NONE, i + 1, 0.0, self.work, self.bt, self.vt, self.off) < 0.0:
+            if _k.stage(self._vd, KX, KW, _NONE, i + 1, 0.0, self.work, self._I) < 0.0:
                 self._failed(KX, KW)
             self._vd = _NONE
 
     def start_rates(self, KX, W0):
         self._w0(W0)
         self._vd = _NONE
-        _k.stage(_NONE, KX, self._zK, self._one, 0, 0.0, self.work, self.bt, self.vt, self.off)
+        _k.stage(_NONE, KX, self._zK, self._one, 0, 0.0, self.work, self._I)
 
     def end(self, KX, KW, b, h, W0):
         if W0 is not self._W0_src:
             self._W0[:] = W0
             self._W0_src = W0
         i = self._pending[0] + 1 if len(self._vd) else len(b)
-        c = _k.stage(self._vd, KX, KW, b, i, h, self.work, self.bt, self.vt, self.off)
+        c = _k.stage(self._vd, KX, KW, b, i, h, self.work, self._I)
         if c < 0.0:
             self._failed(KX, KW)
         self._vd = _NONE
         return self._X.copy(), self._W.copy(), self._q.copy(), self._V.copy(), self._p.copy()
+
+    def run_stages(self, KX, KW, A, c, i0, h, t, W0, climit=np.inf):
+        """Stages i0, ..., len(c) - 1 of the step from t (the explicit steppers' loop, as
+        ``stage`` for each): one kernel call and the model's f per stage, the names bound
+        once. Returns 0.0, or the chart usage of the first stage beyond ``climit`` (its f
+        not called); the last stage's V̇ is converted by :meth:`end_step` or :meth:`end`.
+        KX, KW: the stepper's stage buffers (float64, C-contiguous: the kernel is called
+        without type checks), A's rows float64 vectors."""
+        if W0 is not self._W0_src:
+            self._W0[:] = W0
+            self._W0_src = W0
+        kern, f, w, I, q, V = _STAGE, self.model.f, self.work, self._I, self._q, self._V
+        vd, n = self._vd, 0
+        try:
+            for i in range(i0, len(c)):
+                cm = kern(vd, KX, KW, A[i], i, h, w, I)
+                if cm < 0.0 or cm > climit:
+                    self._vd = _NONE
+                    if cm < 0.0:
+                        self._pending = (i - 1, t, t + c[i - 1] * h)
+                        self._h = h
+                        self._failed(KX, KW)
+                    return cm
+                vd = f(q, V, t + c[i] * h)
+                n += 1
+                if vd.__class__ is not _NDARRAY or vd.dtype is not _F64 or vd.ndim != 1:
+                    vd = np.ascontiguousarray(vd, dtype=float).reshape(-1)
+        finally:
+            self.n_f += n
+        self._vd = vd
+        self._pending = (len(c) - 1, t, t + c[-1] * h)
+        self._h = h
+        return 0.0
+
+    def end_step(self, KX, KW, T, h, W0, rtol, atol):
+        """The end of an embedded pair's step in one kernel call (:func:`kernels.stage.step_end`):
+        (X1, W1, q1, V1, quats, s5, s3, num, den, sq) as :meth:`LocalProblem.end_step`; the
+        four states are views of one new array."""
+        if W0 is not self._W0_src:
+            self._W0[:] = W0
+            self._W0_src = W0
+        vd = self._vd
+        i = self._pending[0] + 1 if len(vd) else T.shape[1]
+        st, s5, s3, num, den, sq = _STEP_END(vd, KX, KW, T, i, h, self.work, self._I, rtol, atol)
+        if st < 0.0:
+            self._failed(KX, KW)
+        self._vd = _NONE
+        y = self.work[:self._n_end].copy()
+        a, b, c = self.nX, self.nX + self.nv, self.nX + self.nv + len(self._qk)
+        return y[:a], y[a:b], y[b:c], y[c:], self._p.copy(), s5, s3, num, den, sq
 
     def chart_overrun(self, X=None):
         return super().chart_overrun(self._X if X is None else X)

@@ -290,6 +290,28 @@ class LocalProblem:
         q1, quats = self.configuration(X1)
         return X1, W1, q1, self.model_velocity(W1, quats), quats
 
+    def run_stages(self, KX, KW, A, c, i0, h, t, W0, climit=np.inf):
+        """Stages i0, ..., len(c) - 1 of the step from t (weights A[i], times t + c[i] h), as
+        :meth:`stage` for each. Returns 0.0, or the chart usage of the first stage beyond
+        ``climit`` (its f not called)."""
+        for i in range(i0, len(c)):
+            cm = self.stage(KX, KW, i, A[i], h, W0, t, t + c[i] * h, climit)
+            if cm:
+                return cm
+        return 0.0
+
+    def end_step(self, KX, KW, T, h, W0, rtol, atol):
+        """The end of an embedded pair's step: (X1, W1, q1, V1, quats) with the weights b = T[0]
+        (as :meth:`end`), the error sums (s5, s3) of e5 = T[1], e3 = T[2] (:meth:`error_sums`),
+        the stiffness test's (num, den) = the error sums of T[3], T[4] with unit scale (0, 0
+        when T has 3 rows), and sq = |q1|² + |V1|² (not finite when q1 or V1 is not)."""
+        X1, W1, q1, V1, quats = self.end(KX, KW, T[0], h, W0)
+        s5, s3 = self.error_sums(KX, KW, T[1], T[2], X1, W1, W0, rtol, atol)
+        num = den = 0.0
+        if len(T) > 3:
+            num, den = self.error_sums(KX, KW, T[3], T[4], KX[0], KW[0], KW[0], 0.0, 1.0)
+        return X1, W1, q1, V1, quats, s5, s3, num, den, float(q1.dot(q1) + V1.dot(V1))
+
     def state_at(self, X, W):
         """(q, V) at local state (X, W) of the current step."""
         q, quats = self.configuration(X)

@@ -4,8 +4,10 @@ q_{k+1} = τ(q_k, X_{k+1}). Fixed step (euler, rkmk2, rkmk4) and embedded pairs
 control on (X, W), step-size control and dense output: the continuous extension of
 the pair on (X, W) within the step, mapped through τ of the step's own base.
 
-A stage is ``problem.stage(...)``: on the compiled backend two kernel calls around the
-model's f over preallocated buffers (:mod:`lgt_bridge.integrators.compiled`)."""
+The stages of a step are ``problem.run_stages(...)``: on the compiled backend one kernel
+call and the model's f per stage over preallocated buffers, and an embedded pair's end
+(end state, error sums, stiffness sums) is one more call, ``problem.end_step``
+(:mod:`lgt_bridge.integrators.compiled`)."""
 import math
 
 import numpy as np
@@ -44,11 +46,10 @@ def _stage_coefficients(tableau):
 
 
 def _pair_constants(tableau):
-    """(e5, e3, stiff_pair, stiff_d, stiff_a) of an embedded pair, made once per tableau: the
-    error weights as contiguous arrays, and for Hairer's stiffness test the last two stages
-    (i, j) when both are at c = 1 (the stiffest rate seen by the step: ρ ≈ |K_j - K_i| /
-    |y_j - y_i|) with the weights of K_j - K_i and of (y_j - y_i)/h over the stages (None
-    without such a pair)."""
+    """(T, stiff_pair) of an embedded pair, made once per tableau: T's rows the weights
+    b, e5, e3 over the stages and, for Hairer's stiffness test when the last two stages (i, j
+    = stiff_pair, else None) are both at c = 1 (the stiffest rate seen by the step: ρ ≈
+    |K_j - K_i| / |y_j - y_i|), the weights of K_j - K_i and of (y_j - y_i)/h."""
     key = ("pair", id(tableau))
     got = _COEFFICIENTS.get(key)
     if got is None or got[0] is not tableau:
@@ -65,7 +66,8 @@ def _pair_constants(tableau):
             d, a = np.zeros(ns), np.zeros(ns)
             d[j], d[i] = 1.0, -1.0
             a[:j] = np.asarray(tableau.A[j], float)[:j] - np.asarray(tableau.A[i], float)[:j]
-        got = _COEFFICIENTS[key] = (tableau, e5, e3, pair, d, a)
+        rows = [tableau.b, e5, e3] + ([d, a] if pair is not None else [])
+        got = _COEFFICIENTS[key] = (tableau, np.ascontiguousarray(np.array(rows, float)), pair)
     return got[1:]
 
 
@@ -107,17 +109,22 @@ class ExplicitRK(Stepper):
         with self.prob.quiet():
             return self._attempt(t, h)
 
+    def run_stages(self, t, h):
+        """All stages of one step (ChartLimit when one leaves its chart's domain); the last
+        stage's Ẇ is completed by the problem's ``end`` or ``end_step``."""
+        prob = self.prob
+        i0 = 0
+        if self._fsal:
+            prob.start_rates(self.KX, self.W)
+            i0 = 1
+        cm = prob.run_stages(self.KX, self.KW, self._A, self._c, i0, h, t, self.W, self.climit)
+        if cm:
+            raise ChartLimit.at(prob, cm)
+
     def stages(self, t, h):
         """All stages of one step; returns (X1, W1, q1, V1, quats) or raises ChartLimit."""
-        prob, KX, KW, W0, A, lim = self.prob, self.KX, self.KW, self.W, self._A, self.climit
-        for i, c in enumerate(self._c):
-            if i == 0 and self._fsal:
-                prob.start_rates(KX, W0)
-                continue
-            cm = prob.stage(KX, KW, i, A[i], h, W0, t, t + c * h, lim)
-            if cm:
-                raise ChartLimit.at(prob, cm)
-        return prob.end(KX, KW, self._b, h, W0)
+        self.run_stages(t, h)
+        return self.prob.end(self.KX, self.KW, self._b, h, self.W)
 
 
 class FixedRK(ExplicitRK):
@@ -167,12 +174,11 @@ class AdaptiveRK(ExplicitRK):
         self.rtol, self.atol = rtol, atol
         self.h_next = first_step
         self.control = PIController(*tableau.control, order=tableau.err_order)
-        self._e5, self._e3, self._stiff_pair, self._stiff_d, self._stiff_a = _pair_constants(tableau)
+        self._T, self._stiff_pair = _pair_constants(tableau)
         self._n = problem.nX + problem.nv
         self.dense = None                      # DenseStep of the last accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
-        self._errsums = problem.error_sums
         self.stability_bound = self.STABILITY_BOUND.get(tableau.stages, 3.25)
         self._n_stiff = self._n_nonstiff = 0
         self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
@@ -183,27 +189,24 @@ class AdaptiveRK(ExplicitRK):
     #: accepted steps in a row at the stability limit before the model is called stiff (Hairer: 15)
     STIFF_STEPS = 15
 
-    def stiffness_rate(self, h):
+    def stiffness_rate(self, h, num, den):
         """ρ ≈ |f(y_j) − f(y_i)| / |y_j − y_i| from the step's last two stages (both at
-        t + h): the rate of the stiffest mode the step sees; None when not measurable."""
+        t + h): the rate of the stiffest mode the step sees; None when not measurable.
+        ``num``, ``den``: |K_j - K_i|² and |Σ a_k K_k|² (y_j - y_i = h Σ a_k K_k), the error
+        sums of the weights e_j - e_i and a with unit scale (the problem's ``end_step``)."""
         if self._stiff_pair is None:
             return None
-        i, j = self._stiff_pair
-        # |K_j - K_i|² and |Σ a_k K_k|² (y_j - y_i = h Σ a_k K_k) as the error sums of the
-        # weights e_j - e_i and a with unit scale: one call on the compiled backend
-        KX, KW = self.KX, self.KW
-        num, den = self._errsums(KX, KW, self._stiff_d, self._stiff_a, KX[0], KW[0], KW[0], 0.0, 1.0)
         den *= h * h
         if not den > 0.0 or not math.isfinite(num):
             return None
         return math.sqrt(num / den)
 
-    def _detect_stiffness(self, t, h):
+    def _detect_stiffness(self, t, h, num, den):
         """Hairer's test on each accepted step: h·ρ above the stability bound in STIFF_STEPS
         accepted steps (six below it in a row reset the count) means the error control is
         held at the stability limit by a mode it does not need to resolve: ``stiff`` is then
         (t, h_stable = bound/ρ, ρ), for the driver to judge whether the run can afford it."""
-        rho = self.stiffness_rate(h)
+        rho = self.stiffness_rate(h, num, den)
         if rho is None:
             return
         if h * rho > self.stability_bound:
@@ -232,8 +235,8 @@ class AdaptiveRK(ExplicitRK):
             self._fsal = True
         return initial_step(prob.rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order, f0=f0)
 
-    def error_norm(self, h, X1, W1):
-        s5, s3 = self._errsums(self.KX, self.KW, self._e5, self._e3, X1, W1, self.W, self.rtol, self.atol)
+    def error_norm(self, h, s5, s3):
+        """The scaled error norm of the step from its error sums (the problem's ``end_step``)."""
         if self.tab.e3 is None:
             return abs(h) * math.sqrt(s5 / self._n)
         if s5 == 0.0 and s3 == 0.0:
@@ -243,7 +246,9 @@ class AdaptiveRK(ExplicitRK):
     def _attempt(self, t, h):
         tab = self.tab
         try:
-            X1, W1, q1, V1, quats = self.stages(t, h)
+            self.run_stages(t, h)
+            X1, W1, q1, V1, quats, s5, s3, num, den, sq = self.prob.end_step(
+                self.KX, self.KW, self._T, h, self.W, self.rtol, self.atol)
         except ChartLimit as lim:
             self.n_rejected += 1
             self.control.rejected()
@@ -257,17 +262,17 @@ class AdaptiveRK(ExplicitRK):
             self.n_rejected += 1              # a trial step that blew up: retry smaller
             self.control.rejected()
             return False, 0.25 * h
-        en = self.error_norm(h, X1, W1)
+        en = self.error_norm(h, s5, s3)
         if not math.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
         if en <= 1.0:
-            self._detect_stiffness(t, h)
+            self._detect_stiffness(t, h, num, den)
             fac = self.control.accepted(en)
             if self.dense_capable:
                 self.dense = DenseStep(self, t, h, X1, W1)
             i_last = tab.stages - 1
-            self.finish(t + h, q1, V1, W1, quats)
+            self.finish(t + h, q1, V1, W1, quats, checked=math.isfinite(sq))
             # the stage buffers alternate: the dense output keeps the accepted step's stages
             other = self._bufs[1] if self.KX is self._bufs[0][0] else self._bufs[0]
             self._last_KW = self.KW

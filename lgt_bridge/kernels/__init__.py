@@ -53,3 +53,17 @@ def guard_cache(module_file, extra=()):
         os.replace(tmp, stamp)
     except OSError:
         pass
+
+
+def entry_point(kernel):
+    """The compiled entry point of a kernel with one explicit signature: the call without
+    numba's type dispatch (≈ 0.15 µs less for a few array arguments). It checks neither
+    dtype nor layout nor shape, so it is only for arguments whose types the caller
+    guarantees. The dispatcher itself where numba keeps no such entry
+    (NUMBA_DISABLE_JIT=1, other numba versions)."""
+    try:
+        (cres,) = kernel.overloads.values()
+        entry = cres.entry_point
+    except (AttributeError, ValueError):
+        return kernel
+    return entry if callable(entry) else kernel

@@ -230,12 +230,35 @@ def stage_derivative(Vd, W, p, bt, KW, KX, i):
     return ok
 
 
-@njit(cache=True, error_model="numpy")
-def stage(Vd, KX, KW, a, i, h, w, bt, vt, off):
+def pack_tables(bt, vt, off):
+    """The int64 inputs of :func:`stage` and :func:`step_end` as one array (one argument
+    instead of three: a numba call costs ~50 ns per argument): off, the row counts of bt
+    and vt, then bt and vt row by row."""
+    return np.ascontiguousarray(np.concatenate([off, [bt.shape[0], vt.shape[0]], bt.ravel(), vt.ravel()]),
+                                np.int64)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tables(I):
+    """(bt, vt, off) of an array made by :func:`pack_tables` (views)."""
+    nb, nv = I[13], I[14]
+    o = 15 + nb * NCOL
+    return I[15:o].reshape((nb, NCOL)), I[o:o + 4 * nv].reshape((nv, 4)), I[:13]
+
+
+_V, _VC, _MC, _IC = "float64[:]", "float64[::1]", "float64[:, ::1]", "int64[::1]"
+
+
+# explicit signatures (V̇ and the weights of any layout; the buffers C-contiguous): one
+# compilation each, and an entry point without type dispatch for the steppers' own buffers
+@njit(f"float64({_V}, {_MC}, {_MC}, {_V}, int64, float64, {_VC}, {_IC})", cache=True, error_model="numpy")
+def stage(Vd, KX, KW, a, i, h, w, I):
     """One fused call per stage: when ``Vd`` is not empty, the stage derivative of stage
     i - 1 from the model's V̇ (KW[i-1]; -1.0 is returned when KX[i-1] or KW[i-1] is not
     finite); then, when ``a`` is not empty, the state of stage i (X, W, q, V, p in the work
-    array, KX[i] = dψ⁻¹_{-X}(W)), returning the largest chart usage |x|/limit."""
+    array, KX[i] = dψ⁻¹_{-X}(W)), returning the largest chart usage |x|/limit. ``I``: the
+    body and vector tables and the work array's offsets (:func:`pack_tables`)."""
+    bt, vt, off = tables(I)
     X, W, q, V, W0, qk, pk, p = views(w, off)
     if Vd.shape[0] > 0:
         if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
@@ -320,3 +343,32 @@ def error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
         s5 += (a5 / sc) ** 2
         s3 += (a3 / sc) ** 2
     return s5, s3
+
+
+@njit(f"UniTuple(float64, 6)({_V}, {_MC}, {_MC}, {_MC}, int64, float64, {_VC}, {_IC}, float64, float64)",
+      cache=True, error_model="numpy")
+def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
+    """The end of an embedded pair's step in one call: the derivative of stage i - 1 from
+    the model's V̇ (when ``Vd`` is not empty), the end state with the weights b = T[0] (X1,
+    W1, q1, V1, p in the work array), the error sums of the weights e5 = T[1], e3 = T[2]
+    (:func:`error_sums`) and, when T has 5 rows, the stiffness test's sums (the error sums
+    of T[3], T[4] with unit scale). Returns (status, s5, s3, num, den, sq): status -1.0 when
+    the last stage's derivative is not finite (nothing else computed), sq = |q1|² + |V1|²
+    (not finite when q1 or V1 is not)."""
+    bt, vt, off = tables(I)
+    X, W, q, V, W0, qk, pk, p = views(w, off)
+    if Vd.shape[0] > 0:
+        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
+            return -1.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    b = T[0]
+    stage_state(KX, KW, b, b.shape[0], h, W0, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p)
+    s5, s3 = error_sums(KX, KW, T[1], T[2], X, W, W0, rtol, atol)
+    num, den = 0.0, 0.0
+    if T.shape[0] > 3:
+        num, den = error_sums(KX, KW, T[3], T[4], KX[0], KW[0], KW[0], 0.0, 1.0)
+    sq = 0.0
+    for j in range(q.shape[0]):
+        sq += q[j] * q[j]
+    for j in range(V.shape[0]):
+        sq += V[j] * V[j]
+    return 0.0, s5, s3, num, den, sq

@@ -322,3 +322,26 @@ def test_bench_scene_with_the_user_loops_as_natives():
     assert e[2] < e[1] < e[0] and 5 < e[0] / e[2] < 20                        # first order: 10
     assert nat[("DOP853 + renormalization", 1e-10)]["pose_error"] < 1e-7
     assert [r for r in rows if r["group"] == "SO3xR3"][0]["pose_error"] < 1e-6
+
+
+def test_a_model_changed_after_wrapping_is_analyzed_and_checked_again():
+    """A pinocchio.Model wrapped again and again reuses its analysis (joints, passed mass
+    check) only while it is unchanged: an inertia zeroed in place is refused by the next
+    wrap's mass check, restored it passes again, and a joint added gets its new layout."""
+    m = pin.Model()
+    j = m.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root")
+    m.appendBodyToJoint(j, pin.Inertia(1.0, np.zeros(3), np.diag([1.0, 2.0, 3.0])), pin.SE3.Identity())
+    good = pin.Inertia(m.inertias[1])
+    for _ in range(2):                          # the second wrap finds the first's analysis
+        r = simulate(PinocchioModel(m), (0, 0.01), method="dop853", t_eval=[0.01])
+        assert r.success
+    m.inertias[1] = pin.Inertia(1.0, np.zeros(3), np.diag([0.0, 2.0, 3.0]))    # no inertia about x
+    with pytest.raises(InputError, match="mass matrix"):
+        simulate(PinocchioModel(m), (0, 0.01), method="dop853")
+    m.inertias[1] = good
+    assert simulate(PinocchioModel(m), (0, 0.01), method="dop853").success
+    k = m.addJoint(j, pin.JointModelRX(), pin.SE3.Identity(), "arm")
+    m.appendBodyToJoint(k, pin.Inertia(0.5, np.array([0.1, 0.0, 0.0]), np.diag([0.1, 0.1, 0.1])), pin.SE3.Identity())
+    pm = PinocchioModel(m)
+    assert (pm.layout.nq, pm.layout.nv, pm.layout.vector_v) == (8, 7, (6,))
+    assert simulate(pm, (0, 0.01), method="dop853").success
