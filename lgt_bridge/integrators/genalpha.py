@@ -86,8 +86,16 @@ class GenAlpha(Stepper):
         if self.nc and not self.use_M:
             raise InputError("genalpha on a constrained model needs mass_matrix and forces "
                              "from the model (index-3 residual M V̇ - Q + Aᵀλ).")
-        # the residual in accelerations, or in forces (see the module docstring)
-        self.accel_form = not self.nc or type(m).solve_mass is not Model.solve_mass
+        # SE(3) bodies: the linear rows of the residual in the body frame (P = Rᵀ there)
+        self.rotate_rows = any(s.se3 for s in problem.sets)
+        # the residual in accelerations, or in forces (see the module docstring); in forces
+        # with one product by a constant M̄ (no SE(3) body: V̇ = Ẇ)
+        self._Mc = None
+        if self.nc and not self.rotate_rows and m.constant_mass is not None:
+            from .genalpha_matrix import _csr_product
+            from scipy.sparse import csr_matrix
+            self._Mc = _csr_product(csr_matrix(m.constant_mass)) if problem.compiled else m.constant_mass.__matmul__
+        self.accel_form = not self.nc or (self._Mc is None and type(m).solve_mass is not Model.solve_mass)
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
         self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
         self._sparse_kw = self.analytic and accepts(m.iteration_matrix, "sparse")
@@ -97,9 +105,8 @@ class GenAlpha(Stepper):
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
         self._to_local = problem.local_index
-        # SE(3) bodies: the linear rows of the residual in the body frame (P = Rᵀ there)
-        self.rotate_rows = any(s.se3 for s in problem.sets)
         self._solve = None
+        self._memo = {}               # factorize's memory of J's pattern
         self._lu_h = None
         self.Wd = None
         self._prev = None
@@ -189,6 +196,8 @@ class GenAlpha(Stepper):
             r = np.empty(len(Wd1))
             self._finite = math.isfinite(prob.ga_residual(m.f(q1, V1, t1), Wd1, r, W1, quats))
             return r
+        if self._Mc is not None:
+            return self._force_rows(q1, V1, Wd1, lam, t1, h)
         q1, V1, quats, W1 = q1.copy(), V1.copy(), quats.copy(), W1.copy()
         A = self._A(q1)
         Q = m.forces(q1, V1, t1) - A.T @ lam
@@ -202,16 +211,33 @@ class GenAlpha(Stepper):
         self._finite = bool(np.isfinite(r).all())
         return r
 
+    def _force_rows(self, q1, V1, Wd1, lam, t1, h):
+        """[M̄ Ẇ - Q + Aᵀλ; g/(h²β)] with the constant M̄ (no SE(3) body: V̇ = Ẇ), Q and g
+        from one model call at the state."""
+        m, n = self.prob.model, len(Wd1)
+        Q, g = m.forces_and_constraints(q1, V1, t1)
+        r = np.empty(n + self.nc)
+        r[:n] = self._Mc(Wd1)
+        r[:n] -= Q
+        r[:n] += self._A(q1).T @ lam
+        if self._vel_rows is None:
+            np.multiply(g, 1.0 / (h * h * self.beta), out=r[n:])
+        else:
+            r[n:] = self._constraint_rows(q1, V1, t1, h, g)
+        self._finite = math.isfinite(r.dot(r))
+        return r
+
     def _A(self, q1):
         """The model's constraint Jacobian at q1 (scipy.sparse on large models that give it)."""
         m = self.prob.model
         return m.constraint_jacobian(q1, sparse=True) if self._sparse_A else m.constraint_jacobian(q1)
 
-    def _constraint_rows(self, q1, V1, t1, h):
+    def _constraint_rows(self, q1, V1, t1, h, g=None):
         """g(q, t)/(h²β) on position rows, (A V - b)/(h γ k) on velocity-level rows (their
-        Jacobian in Ẇ is then A, like the position rows' A Z/(h²β))."""
+        Jacobian in Ẇ is then A, like the position rows' A Z/(h²β)); ``g``: g(q, t) when
+        the caller has it."""
         m = self.prob.model
-        g = m.constraints_at(q1, t1) / (h * h * self.beta)
+        g = (m.constraints_at(q1, t1) if g is None else g) / (h * h * self.beta)
         if self._vel_rows is None:
             return g
         vr = self._vel_rows
@@ -251,11 +277,17 @@ class GenAlpha(Stepper):
         q1, quats = prob.configuration(dX)
         V1 = prob.model_velocity(W1, quats)
         aff = self._consts
-        Z, Dv, Da, Pt = self._kin.transforms(dX, W1, Wd1, quats, aff.s_v, h * h * self.beta * aff.k)
         n, nc = len(Wd1), self.nc
         kw = {"sparse": n + nc > SPARSE_MIN} if self._sparse_kw else {}
         if self._lam_kw and nc:
             kw["lam"] = lam
+        s_p = h * h * self.beta * aff.k
+        if not prob.sets:
+            # vector and circle coordinates only: Z = s_p I, D_v = s_v I, D_a = I, no P —
+            # the model's own M + s_v C_t + s_p K_t, one matrix
+            return self._vector_matrices(m.iteration_matrix(q1, V1, t1, 1.0, aff.s_v, s_p, **kw),
+                                         q1, V1, t1, h, kw)
+        Z, Dv, Da, Pt = self._kin.transforms(dX, W1, Wd1, quats, aff.s_v, s_p)
         M, Ct, Kt = (coo(m.iteration_matrix(q1, V1, t1, *coef, **kw))
                      for coef in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
         parts = [Da.rmul(*M), Dv.rmul(*Ct), Z.rmul(*Kt)]
@@ -273,6 +305,26 @@ class GenAlpha(Stepper):
                 parts.append((vr + n, vc, vv / aff.s_v))                           # A D_v/(hγk)
             gr, gc, gv = Z.rmul(Ar[pos], Ac[pos], Av[pos])
             parts.append((gr + n, gc, gv / (h * h * self.beta)))                   # A Z/(h²β)
+            if lparts is not None:
+                lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
+        shape = (n + nc, n + nc)
+        return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
+
+    def _vector_matrices(self, K, q1, V1, t1, h, kw):
+        """(J, L) of :meth:`_analytic_matrices` on a model of vector and circle coordinates
+        only: K = M + s_v C_t + s_p K_t, J = [K, Aᵀ; A s_p/(h²β) (A on velocity rows), 0],
+        L = diag(M, I) in the acceleration form."""
+        m, n, nc = self.prob.model, K.shape[0], self.nc
+        parts = [coo(K)]
+        lparts = None
+        if self.accel_form:
+            lparts = [coo(m.iteration_matrix(q1, V1, t1, 1.0, 0.0, 0.0, **kw))]
+        if nc:
+            Ar, Ac, Av = coo(self._A(q1))
+            scale = np.full(len(Ar), self._consts.k)                    # s_p/(h²β) = k
+            if self._vel_rows is not None:
+                scale[np.isin(Ar, self._vel_rows)] = 1.0                 # A D_v/(hγk) = A
+            parts += [(Ac, Ar + n, Av), (Ar + n, Ac, Av * scale)]
             if lparts is not None:
                 lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
         shape = (n + nc, n + nc)
@@ -309,7 +361,7 @@ class GenAlpha(Stepper):
             raise StepFailed(f"genalpha: Newton diverged at t = {t1:.9g} (h = {h:.3g}): the iteration "
                              "matrix is not finite; reduce dt.")
         try:
-            self._solve = factorize(J, L, compiled=self.prob.compiled)
+            self._solve = factorize(J, L, compiled=self.prob.compiled, memo=self._memo)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise StepFailed(f"genalpha: the iteration matrix is singular at t = {t1:.9g} "
                              f"(h = {h:.3g}): {exc}; check the constraints for redundancy or "
