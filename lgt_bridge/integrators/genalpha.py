@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize
+from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize, fd_matrix
 
 
 # what a step's state needs besides Ẇ_{k+1}, in which it is affine:
@@ -90,11 +90,15 @@ class GenAlpha(Stepper):
         self.rotate_rows = any(s.se3 for s in problem.sets)
         # the residual in accelerations, or in forces (see the module docstring); in forces
         # with one product by a constant M̄ (no SE(3) body: V̇ = Ẇ)
-        self._Mc = None
+        self._Mc = self._Mcsr = None
         if self.nc and not self.rotate_rows and m.constant_mass is not None:
             from .genalpha_matrix import _csr_product
             from scipy.sparse import csr_matrix
-            self._Mc = _csr_product(csr_matrix(m.constant_mass)) if problem.compiled else m.constant_mass.__matmul__
+            Mc = csr_matrix(m.constant_mass)
+            self._Mc = _csr_product(Mc) if problem.compiled else Mc.__matmul__
+            if problem.compiled:
+                self._Mcsr = (Mc.indptr.astype(np.int64), Mc.indices.astype(np.int64),
+                              np.ascontiguousarray(Mc.data, dtype=float))
         self.accel_form = not self.nc or (self._Mc is None and type(m).solve_mass is not Model.solve_mass)
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
         self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
@@ -331,27 +335,7 @@ class GenAlpha(Stepper):
         return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
 
     def _fd_matrix(self, Wd1, lam, t1, h):
-        """Finite differences of the residual in Ẇ; the λ columns (the residual is affine
-        in λ) from A: P M⁻¹Aᵀ or P Aᵀ."""
-        prob, m = self.prob, self.prob.model
-        n = len(Wd1)
-        r0 = self._residual(Wd1, lam, t1, h)
-        J = np.zeros((n + self.nc, n + self.nc))
-        # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
-        scale = 1.5e-8 / min(1.0, h * h * self.beta)
-        for j in range(n):
-            e = scale * max(1.0, abs(Wd1[j]))
-            Wp = Wd1.copy()
-            Wp[j] += e
-            J[:, j] = (self._residual(Wp, lam, t1, h) - r0) / e
-        if self.nc:
-            q1, quats = prob.configuration(self._state(Wd1, h)[1])
-            At = m.constraint_jacobian(q1).T
-            cols = m.solve_mass(q1, At) if self.accel_form else At
-            if self.rotate_rows:
-                cols = np.stack([prob.group_velocity(c, quats) for c in cols.T], axis=1)
-            J[:n, n:] = cols
-        return J
+        return fd_matrix(self, Wd1, lam, t1, h)
 
     def _jacobian(self, Wd1, lam, t1, h):
         J, L = self._matrices(Wd1, lam, t1, h)
@@ -434,20 +418,43 @@ class GenAlpha(Stepper):
         prev, converged, finite = None, False, True
         tol, floor = self._newton_tolerances(h, n)
         sizes = []
+        fused = self._Mcsr is not None and self._vel_rows is None and not self._sparse_A
+        if fused:                    # one kernel per iteration: residual, solve and update
+            from ..kernels.stage import ga_force_newton
+            z = np.concatenate([Wd1, lam])
+            r = np.empty(len(z))
+            Wd1, lam = z[:n], z[n:]
+            cg = 1.0 / (h * h * self.beta)
+            m = self.prob.model
         for it in range(self.nmax):
-            r = self._residual(Wd1, lam, t1, h)
-            if not self._finite:
-                finite = False
-                break
-            dz = self._solve(r)
-            dW = dz[:n] if self.nc else dz
-            Wd1 = Wd1 - dW
-            if self.nc:
-                lam = lam - dz[n:]
-            self.n_newton += 1
-            # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
-            # of size eps/(h²β) from the scaled constraint rows
-            size = h * math.sqrt(dW.dot(dW) / n)
+            factors = getattr(self._solve, "factors", None) if fused else None
+            if factors is not None:
+                q1, V1, _, _ = self._evaluate(Wd1, h)
+                self.prob.n_f += 1
+                Q, g = m.forces_and_constraints(q1, V1, t1)
+                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float), Q, g, cg, *factors, z, r)
+                if d2 < 0.0:
+                    finite = False
+                    break
+                self.n_newton += 1
+                size = h * math.sqrt(d2 / n)
+            else:
+                r = self._residual(Wd1, lam, t1, h)
+                if not self._finite:
+                    finite = False
+                    break
+                dz = self._solve(r)
+                dW = dz[:n] if self.nc else dz
+                if fused:
+                    z -= dz
+                else:
+                    Wd1 = Wd1 - dW
+                    if self.nc:
+                        lam = lam - dz[n:]
+                self.n_newton += 1
+                # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
+                # of size eps/(h²β) from the scaled constraint rows
+                size = h * math.sqrt(dW.dot(dW) / n)
             sizes.append(size)
             if size <= tol:
                 converged = True
@@ -472,6 +479,8 @@ class GenAlpha(Stepper):
                        f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
             raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
                              diverged=False)
+        if fused:
+            Wd1, lam = Wd1.copy(), lam.copy()
         q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))
         a1 = self._consts.a0 + self._consts.k * Wd1
         self._prev = (h, self.Wd, self.lam)

@@ -242,6 +242,7 @@ def _lu_solver(lu):
         x = np.empty(n)
         lu_solve(*f, perm, np.ascontiguousarray(r, dtype=float), x)
         return x
+    solve.factors = (*f, perm)              # for kernels that solve inside (genalpha)
     return solve
 
 
@@ -293,3 +294,27 @@ def _block_inverse(J, L):
         members = order[first[comps][:, None] + np.arange(m)]
         parts.append((np.repeat(members, m, axis=1).ravel(), np.tile(members, (1, m)).ravel(), S.ravel()))
     return csr((n, n), parts)
+
+
+def fd_matrix(ga, Wd1, lam, t1, h):
+    """The Newton matrix of the generalized-α stepper ``ga`` by finite differences of its
+    residual in Ẇ; the λ columns (the residual is affine in λ) from A: P M⁻¹Aᵀ or P Aᵀ."""
+    prob, m = ga.prob, ga.prob.model
+    n = len(Wd1)
+    r0 = ga._residual(Wd1, lam, t1, h)
+    J = np.zeros((n + ga.nc, n + ga.nc))
+    # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
+    scale = 1.5e-8 / min(1.0, h * h * ga.beta)
+    for j in range(n):
+        e = scale * max(1.0, abs(Wd1[j]))
+        Wp = Wd1.copy()
+        Wp[j] += e
+        J[:, j] = (ga._residual(Wp, lam, t1, h) - r0) / e
+    if ga.nc:
+        q1, quats = prob.configuration(ga._state(Wd1, h)[1])
+        At = m.constraint_jacobian(q1).T
+        cols = m.solve_mass(q1, At) if ga.accel_form else At
+        if ga.rotate_rows:
+            cols = np.stack([prob.group_velocity(c, quats) for c in cols.T], axis=1)
+        J[:n, n:] = cols
+    return J
