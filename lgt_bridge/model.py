@@ -188,6 +188,14 @@ class Model:
         """g(q, t): ``constraints(q)`` unless the model's constraints depend on time."""
         return self.constraints(q)
 
+    def forces_and_constraints(self, q, V, t):
+        """(Q(q, V, t), g(q, t)): both at one state (an engine writes it once)."""
+        return self.forces(q, V, t), self.constraints_at(q, t)
+
+    #: the mass matrix when it is the same at every q (dense or scipy.sparse), else None:
+    #: generalized-α then keeps its residual in forces, M V̇ - Q + Aᵀλ, with one product by it
+    constant_mass = None
+
     def velocity_rhs(self, q, t):
         """b(q, t) in A(q) V = b (-∂g/∂t for position rows); None when it is zero."""
         return None

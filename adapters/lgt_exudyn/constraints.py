@@ -237,8 +237,13 @@ class ConstraintRows:
         E = self.engine
         E.sd.SetODE2Coordinates(q - E.ref)
         E.sd.SetTime(t)
+        return self.at_written(t)
+
+    def at_written(self, t):
+        """g of the kept rows at the coordinates and time written in the system (t: that time)."""
+        E = self.engine
         E.solver.ComputeAlgebraicEquations(E.mbs, False)
-        g = np.array(E.solver.GetSystemResidual())[E.ae0:][self.ae_keep]
+        g = np.asarray(E.solver.GetSystemResidual())[E.ae0:][self.ae_keep]
         if self.nonholonomic:
             g[list(self.nonholonomic)] = 0.0
         if self.ramp is not None:

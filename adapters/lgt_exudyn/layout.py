@@ -137,6 +137,16 @@ class NodeLayout:
         H[self.vq, self.vv] = 1.0
         return H
 
+    def selection(self):
+        """Without rotation coordinates H is a 0/1 selection, H[qi[j], j] = 1: qi (nv), so
+        that Hᵀ J H = J[qi][:, qi]; None with rotation coordinates."""
+        if self.types or self.n2 != self.nv:
+            return None
+        qi = np.empty(self.nv, int)
+        qi[self.lin_v.ravel()] = self.pos_q.ravel()
+        qi[self.vv] = self.vq
+        return qi
+
     def H_sparse(self, q):
         """H(q) as a scipy CSR matrix (a few entries per row: large models)."""
         from scipy.sparse import csr_matrix

@@ -311,6 +311,24 @@ class ExudynModel(StepHooks, Model):
         self.engine.write(q2, self.nodes.rates_from_twist(q2, V2), t)
         return self.ode1.with_rates(Q)
 
+    @property
+    def constant_mass(self):
+        """The twist mass matrix M̄ (scipy CSR) when it is constant and there are no ODE1
+        states, else None (``Model.constant_mass``)."""
+        if self.Mbar is None or self.ode1 is not None:
+            return None
+        if self._Mbar_sparse is None:
+            from scipy.sparse import csr_matrix
+            self._Mbar_sparse = csr_matrix(self.Mbar)
+        return self._Mbar_sparse
+
+    @engine_call
+    def forces_and_constraints(self, q, V, t):
+        """(Q̄, g) at one state: one write for both (``Model.forces_and_constraints``)."""
+        if not self.n_constraints or self.ode1 is not None or not self._compiled:
+            return Model.forces_and_constraints(self, q, V, t)
+        return self._forces_compiled(q, V, t)[0], self.cons.at_written(t)
+
     def solve_mass(self, q, B):
         """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""
         if self.ode1 is None:
@@ -346,6 +364,18 @@ class ExudynModel(StepHooks, Model):
                 cached = self._it_cache = (key, parts)
                 return combine_iteration(parts, c_acc, c_vel, c_pos)
             S, n2 = self.solver, self.n2
+            qi = self.nodes.selection()
+            if qi is not None:                          # no rotations: Hᵀ J H = J[qi][:, qi]
+                Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
+                parts = [Mbar]
+                for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
+                    S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
+                    parts.append(-np.asarray(S.GetSystemJacobian())[qi[:, None], qi])
+                if sparse:
+                    from scipy.sparse import csr_matrix
+                    parts = [csr_matrix(X) for X in parts]
+                cached = self._it_cache = (key, parts)
+                return combine_iteration(parts, c_acc, c_vel, c_pos)
             # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
             # threads, woken once per matrix under load, cost ~30 ms a call
             H = self.nodes.H_sparse(np.asarray(q, float))

@@ -289,6 +289,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               n_rejected=stepper.n_rejected, n_newton=stepper.n_newton,
               wall_s=time.perf_counter() - wall0, exudyn_steps=n, success=not failure,
               message=failure[0] if failure else stopped[0] if stopped else "reached endTime")
+    if stepper.n_jacobians:
+        st["n_jacobians"] = stepper.n_jacobians
     if tracker is not None:
         st["t_events"], st["q_events"], st["V_events"] = tracker.close()
     if controlled:

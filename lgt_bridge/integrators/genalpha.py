@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize
+from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize, fd_matrix
 
 
 # what a step's state needs besides Ẇ_{k+1}, in which it is affine:
@@ -86,8 +86,20 @@ class GenAlpha(Stepper):
         if self.nc and not self.use_M:
             raise InputError("genalpha on a constrained model needs mass_matrix and forces "
                              "from the model (index-3 residual M V̇ - Q + Aᵀλ).")
-        # the residual in accelerations, or in forces (see the module docstring)
-        self.accel_form = not self.nc or type(m).solve_mass is not Model.solve_mass
+        # SE(3) bodies: the linear rows of the residual in the body frame (P = Rᵀ there)
+        self.rotate_rows = any(s.se3 for s in problem.sets)
+        # the residual in accelerations, or in forces (see the module docstring); in forces
+        # with one product by a constant M̄ (no SE(3) body: V̇ = Ẇ)
+        self._Mc = self._Mcsr = None
+        if self.nc and not self.rotate_rows and m.constant_mass is not None:
+            from .genalpha_matrix import _csr_product
+            from scipy.sparse import csr_matrix
+            Mc = csr_matrix(m.constant_mass)
+            self._Mc = _csr_product(Mc) if problem.compiled else Mc.__matmul__
+            if problem.compiled:
+                self._Mcsr = (Mc.indptr.astype(np.int64), Mc.indices.astype(np.int64),
+                              np.ascontiguousarray(Mc.data, dtype=float))
+        self.accel_form = not self.nc or (self._Mc is None and type(m).solve_mass is not Model.solve_mass)
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
         self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
         self._sparse_kw = self.analytic and accepts(m.iteration_matrix, "sparse")
@@ -97,9 +109,8 @@ class GenAlpha(Stepper):
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
         self._to_local = problem.local_index
-        # SE(3) bodies: the linear rows of the residual in the body frame (P = Rᵀ there)
-        self.rotate_rows = any(s.se3 for s in problem.sets)
         self._solve = None
+        self._memo = {}               # factorize's memory of J's pattern
         self._lu_h = None
         self.Wd = None
         self._prev = None
@@ -189,6 +200,8 @@ class GenAlpha(Stepper):
             r = np.empty(len(Wd1))
             self._finite = math.isfinite(prob.ga_residual(m.f(q1, V1, t1), Wd1, r, W1, quats))
             return r
+        if self._Mc is not None:
+            return self._force_rows(q1, V1, Wd1, lam, t1, h)
         q1, V1, quats, W1 = q1.copy(), V1.copy(), quats.copy(), W1.copy()
         A = self._A(q1)
         Q = m.forces(q1, V1, t1) - A.T @ lam
@@ -202,16 +215,33 @@ class GenAlpha(Stepper):
         self._finite = bool(np.isfinite(r).all())
         return r
 
+    def _force_rows(self, q1, V1, Wd1, lam, t1, h):
+        """[M̄ Ẇ - Q + Aᵀλ; g/(h²β)] with the constant M̄ (no SE(3) body: V̇ = Ẇ), Q and g
+        from one model call at the state."""
+        m, n = self.prob.model, len(Wd1)
+        Q, g = m.forces_and_constraints(q1, V1, t1)
+        r = np.empty(n + self.nc)
+        r[:n] = self._Mc(Wd1)
+        r[:n] -= Q
+        r[:n] += self._A(q1).T @ lam
+        if self._vel_rows is None:
+            np.multiply(g, 1.0 / (h * h * self.beta), out=r[n:])
+        else:
+            r[n:] = self._constraint_rows(q1, V1, t1, h, g)
+        self._finite = math.isfinite(r.dot(r))
+        return r
+
     def _A(self, q1):
         """The model's constraint Jacobian at q1 (scipy.sparse on large models that give it)."""
         m = self.prob.model
         return m.constraint_jacobian(q1, sparse=True) if self._sparse_A else m.constraint_jacobian(q1)
 
-    def _constraint_rows(self, q1, V1, t1, h):
+    def _constraint_rows(self, q1, V1, t1, h, g=None):
         """g(q, t)/(h²β) on position rows, (A V - b)/(h γ k) on velocity-level rows (their
-        Jacobian in Ẇ is then A, like the position rows' A Z/(h²β))."""
+        Jacobian in Ẇ is then A, like the position rows' A Z/(h²β)); ``g``: g(q, t) when
+        the caller has it."""
         m = self.prob.model
-        g = m.constraints_at(q1, t1) / (h * h * self.beta)
+        g = (m.constraints_at(q1, t1) if g is None else g) / (h * h * self.beta)
         if self._vel_rows is None:
             return g
         vr = self._vel_rows
@@ -251,11 +281,17 @@ class GenAlpha(Stepper):
         q1, quats = prob.configuration(dX)
         V1 = prob.model_velocity(W1, quats)
         aff = self._consts
-        Z, Dv, Da, Pt = self._kin.transforms(dX, W1, Wd1, quats, aff.s_v, h * h * self.beta * aff.k)
         n, nc = len(Wd1), self.nc
         kw = {"sparse": n + nc > SPARSE_MIN} if self._sparse_kw else {}
         if self._lam_kw and nc:
             kw["lam"] = lam
+        s_p = h * h * self.beta * aff.k
+        if not prob.sets:
+            # vector and circle coordinates only: Z = s_p I, D_v = s_v I, D_a = I, no P —
+            # the model's own M + s_v C_t + s_p K_t, one matrix
+            return self._vector_matrices(m.iteration_matrix(q1, V1, t1, 1.0, aff.s_v, s_p, **kw),
+                                         q1, V1, t1, h, kw)
+        Z, Dv, Da, Pt = self._kin.transforms(dX, W1, Wd1, quats, aff.s_v, s_p)
         M, Ct, Kt = (coo(m.iteration_matrix(q1, V1, t1, *coef, **kw))
                      for coef in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
         parts = [Da.rmul(*M), Dv.rmul(*Ct), Z.rmul(*Kt)]
@@ -278,28 +314,28 @@ class GenAlpha(Stepper):
         shape = (n + nc, n + nc)
         return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
 
+    def _vector_matrices(self, K, q1, V1, t1, h, kw):
+        """(J, L) of :meth:`_analytic_matrices` on a model of vector and circle coordinates
+        only: K = M + s_v C_t + s_p K_t, J = [K, Aᵀ; A s_p/(h²β) (A on velocity rows), 0],
+        L = diag(M, I) in the acceleration form."""
+        m, n, nc = self.prob.model, K.shape[0], self.nc
+        parts = [coo(K)]
+        lparts = None
+        if self.accel_form:
+            lparts = [coo(m.iteration_matrix(q1, V1, t1, 1.0, 0.0, 0.0, **kw))]
+        if nc:
+            Ar, Ac, Av = coo(self._A(q1))
+            scale = np.full(len(Ar), self._consts.k)                    # s_p/(h²β) = k
+            if self._vel_rows is not None:
+                scale[np.isin(Ar, self._vel_rows)] = 1.0                 # A D_v/(hγk) = A
+            parts += [(Ac, Ar + n, Av), (Ar + n, Ac, Av * scale)]
+            if lparts is not None:
+                lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
+        shape = (n + nc, n + nc)
+        return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
+
     def _fd_matrix(self, Wd1, lam, t1, h):
-        """Finite differences of the residual in Ẇ; the λ columns (the residual is affine
-        in λ) from A: P M⁻¹Aᵀ or P Aᵀ."""
-        prob, m = self.prob, self.prob.model
-        n = len(Wd1)
-        r0 = self._residual(Wd1, lam, t1, h)
-        J = np.zeros((n + self.nc, n + self.nc))
-        # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
-        scale = 1.5e-8 / min(1.0, h * h * self.beta)
-        for j in range(n):
-            e = scale * max(1.0, abs(Wd1[j]))
-            Wp = Wd1.copy()
-            Wp[j] += e
-            J[:, j] = (self._residual(Wp, lam, t1, h) - r0) / e
-        if self.nc:
-            q1, quats = prob.configuration(self._state(Wd1, h)[1])
-            At = m.constraint_jacobian(q1).T
-            cols = m.solve_mass(q1, At) if self.accel_form else At
-            if self.rotate_rows:
-                cols = np.stack([prob.group_velocity(c, quats) for c in cols.T], axis=1)
-            J[:n, n:] = cols
-        return J
+        return fd_matrix(self, Wd1, lam, t1, h)
 
     def _jacobian(self, Wd1, lam, t1, h):
         J, L = self._matrices(Wd1, lam, t1, h)
@@ -309,7 +345,7 @@ class GenAlpha(Stepper):
             raise StepFailed(f"genalpha: Newton diverged at t = {t1:.9g} (h = {h:.3g}): the iteration "
                              "matrix is not finite; reduce dt.")
         try:
-            self._solve = factorize(J, L, compiled=self.prob.compiled)
+            self._solve = factorize(J, L, compiled=self.prob.compiled, memo=self._memo)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise StepFailed(f"genalpha: the iteration matrix is singular at t = {t1:.9g} "
                              f"(h = {h:.3g}): {exc}; check the constraints for redundancy or "
@@ -382,20 +418,43 @@ class GenAlpha(Stepper):
         prev, converged, finite = None, False, True
         tol, floor = self._newton_tolerances(h, n)
         sizes = []
+        fused = self._Mcsr is not None and self._vel_rows is None and not self._sparse_A
+        if fused:                    # one kernel per iteration: residual, solve and update
+            from ..kernels.stage import ga_force_newton
+            z = np.concatenate([Wd1, lam])
+            r = np.empty(len(z))
+            Wd1, lam = z[:n], z[n:]
+            cg = 1.0 / (h * h * self.beta)
+            m = self.prob.model
         for it in range(self.nmax):
-            r = self._residual(Wd1, lam, t1, h)
-            if not self._finite:
-                finite = False
-                break
-            dz = self._solve(r)
-            dW = dz[:n] if self.nc else dz
-            Wd1 = Wd1 - dW
-            if self.nc:
-                lam = lam - dz[n:]
-            self.n_newton += 1
-            # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
-            # of size eps/(h²β) from the scaled constraint rows
-            size = h * math.sqrt(dW.dot(dW) / n)
+            factors = getattr(self._solve, "factors", None) if fused else None
+            if factors is not None:
+                q1, V1, _, _ = self._evaluate(Wd1, h)
+                self.prob.n_f += 1
+                Q, g = m.forces_and_constraints(q1, V1, t1)
+                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float), Q, g, cg, *factors, z, r)
+                if d2 < 0.0:
+                    finite = False
+                    break
+                self.n_newton += 1
+                size = h * math.sqrt(d2 / n)
+            else:
+                r = self._residual(Wd1, lam, t1, h)
+                if not self._finite:
+                    finite = False
+                    break
+                dz = self._solve(r)
+                dW = dz[:n] if self.nc else dz
+                if fused:
+                    z -= dz
+                else:
+                    Wd1 = Wd1 - dW
+                    if self.nc:
+                        lam = lam - dz[n:]
+                self.n_newton += 1
+                # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
+                # of size eps/(h²β) from the scaled constraint rows
+                size = h * math.sqrt(dW.dot(dW) / n)
             sizes.append(size)
             if size <= tol:
                 converged = True
@@ -420,6 +479,8 @@ class GenAlpha(Stepper):
                        f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
             raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
                              diverged=False)
+        if fused:
+            Wd1, lam = Wd1.copy(), lam.copy()
         q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))
         a1 = self._consts.a0 + self._consts.k * Wd1
         self._prev = (h, self.Wd, self.lam)

@@ -183,25 +183,36 @@ class Kinematics:
         return Z, Dv, Da, Pt
 
 
-def factorize(J, L=None, compiled=False):
+def factorize(J, L=None, compiled=False, memo=None):
     """A solver r ↦ J⁻¹ (L r) (L = None: the identity) for dense or scipy.sparse J, L.
     A J that falls apart into independent blocks of at most BLOCK_MAX unknowns (bodies
     that do not interact) is inverted block by block and J⁻¹L applied as one sparse
     product (a sparse triangular solve costs more than that); otherwise sparse LU above
-    SPARSE_MIN unknowns or for a sparse J under a quarter full, dense LU below; a dense J of at most DENSE_MAX unknowns goes straight
-    to dense LU (and J⁻¹L is formed once). Raises np.linalg.LinAlgError or RuntimeError on
-    a singular J. ``compiled``: the block product runs in a kernel (scipy's matrix-vector
-    product costs ~3 µs a call, most of a Newton iteration's own work on 100 bodies)."""
+    SPARSE_MIN unknowns or for a sparse J under a quarter full, dense LU below; a dense J
+    of at most DENSE_MAX unknowns goes straight to dense LU (and J⁻¹L is formed once).
+    Raises np.linalg.LinAlgError or RuntimeError on a singular J. ``compiled``: the block
+    product and the sparse LU's solves run in kernels (scipy's matrix-vector product and
+    SuperLU's solve cost ~3 µs a call, most of a Newton iteration's own work on 100
+    bodies). ``memo``: a dict kept between calls, where a pattern of J found not to fall
+    apart is remembered and not searched again."""
     from scipy import sparse
     dense = not sparse.issparse(J) and J.shape[0] <= DENSE_MAX
-    S = None if dense else _block_inverse(sparse.csr_matrix(J), L)
+    S = None
+    if not dense:
+        Jc = sparse.csr_matrix(J)
+        key = (Jc.shape, Jc.indptr.tobytes(), Jc.indices.tobytes()) if memo is not None else None
+        if key is None or memo.get("one_block") != key:
+            S = _block_inverse(Jc, L)
+            if S is None and key is not None:
+                memo["one_block"] = key
     if S is not None:
         return _csr_product(S) if compiled else S.__matmul__
     if J.shape[0] > SPARSE_MIN or (sparse.issparse(J) and 4 * J.nnz < J.shape[0] ** 2):
         # (a sparse J of a moderate size too: a dense J⁻¹L is a threaded BLAS-3 solve,
         # whose threads cost ~10 ms a call under load)
         from scipy.sparse.linalg import splu
-        solve = splu(sparse.csc_matrix(J)).solve
+        lu = splu(sparse.csc_matrix(J))
+        solve = _lu_solver(lu) if compiled else lu.solve
         if L is None:
             return solve
         L = sparse.csr_matrix(L)
@@ -215,6 +226,24 @@ def factorize(J, L=None, compiled=False):
     if L is None:
         return lambda r: sla.lu_solve(lu, r, check_finite=False)
     return sla.lu_solve(lu, L.toarray() if sparse.issparse(L) else L, check_finite=False).dot
+
+
+def _lu_solver(lu):
+    """r ↦ J⁻¹ r from SuperLU's factors through the compiled triangular solves (SuperLU's
+    own solve costs ~3 µs of overhead a call)."""
+    from ..kernels.linalg import lu_solve
+    n = lu.shape[0]
+    L, U = lu.L, lu.U
+    f = [np.asarray(a, np.int64) if a.dtype.kind == "i" else np.ascontiguousarray(a, dtype=float)
+         for a in (L.indptr, L.indices, L.data, U.indptr, U.indices, U.data)]
+    perm = np.concatenate([lu.perm_r, lu.perm_c]).astype(np.int64)
+
+    def solve(r):
+        x = np.empty(n)
+        lu_solve(*f, perm, np.ascontiguousarray(r, dtype=float), x)
+        return x
+    solve.factors = (*f, perm)              # for kernels that solve inside (genalpha)
+    return solve
 
 
 def _csr_product(S):
@@ -265,3 +294,27 @@ def _block_inverse(J, L):
         members = order[first[comps][:, None] + np.arange(m)]
         parts.append((np.repeat(members, m, axis=1).ravel(), np.tile(members, (1, m)).ravel(), S.ravel()))
     return csr((n, n), parts)
+
+
+def fd_matrix(ga, Wd1, lam, t1, h):
+    """The Newton matrix of the generalized-α stepper ``ga`` by finite differences of its
+    residual in Ẇ; the λ columns (the residual is affine in λ) from A: P M⁻¹Aᵀ or P Aᵀ."""
+    prob, m = ga.prob, ga.prob.model
+    n = len(Wd1)
+    r0 = ga._residual(Wd1, lam, t1, h)
+    J = np.zeros((n + ga.nc, n + ga.nc))
+    # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
+    scale = 1.5e-8 / min(1.0, h * h * ga.beta)
+    for j in range(n):
+        e = scale * max(1.0, abs(Wd1[j]))
+        Wp = Wd1.copy()
+        Wp[j] += e
+        J[:, j] = (ga._residual(Wp, lam, t1, h) - r0) / e
+    if ga.nc:
+        q1, quats = prob.configuration(ga._state(Wd1, h)[1])
+        At = m.constraint_jacobian(q1).T
+        cols = m.solve_mass(q1, At) if ga.accel_form else At
+        if ga.rotate_rows:
+            cols = np.stack([prob.group_velocity(c, quats) for c in cols.T], axis=1)
+        J[:n, n:] = cols
+    return J

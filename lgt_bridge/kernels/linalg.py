@@ -7,7 +7,8 @@ nonzero column of row i of its lower triangle, which the factor keeps); an empty
 means dense. The factor overwrites S's lower triangle with L (S = L Lᵀ), with 1 / L_ii on
 the diagonal, so that both solves multiply. The numpy reference is ``np.linalg.cholesky``
 and ``np.linalg.solve``; tests hold them equal. Plain loops: ``NUMBA_DISABLE_JIT=1`` runs
-the same source interpreted.
+the same source interpreted. :func:`lu_solve`: the triangular solves of a sparse LU
+factorization (SuperLU's CSC factors), without scipy's per-call overhead.
 """
 import math
 
@@ -106,3 +107,33 @@ def envelope_solve(L, first, start, x):
         xi = x[i]
         for k in range(first[i], i):
             x[k] -= L[si + k] * xi
+
+
+@njit(cache=True, error_model="numpy")
+def lu_solve(lp, li, lv, up, ui, uv, perm, b, x):
+    """x <- the solution of A x = b from a sparse LU factorization Pr A Pc = L U (SuperLU's
+    factors as they come, CSC: ``lp, li, lv`` of L, unit diagonal, ``up, ui, uv`` of U, row
+    indices in any order) and ``perm`` = (perm_r, perm_c) stacked: Pr b has b[i] at
+    perm_r[i], and x[i] is y[perm_c[i]] for the solution y of L U y = Pr b. The numpy
+    reference is ``scipy.sparse.linalg.splu(A).solve``; tests hold them equal."""
+    n = b.shape[0]
+    y = np.empty(n)
+    for i in range(n):
+        y[perm[i]] = b[i]
+    for j in range(n):                      # L y = Pr b, column by column
+        yj = y[j]
+        for k in range(lp[j], lp[j + 1]):
+            if li[k] > j:
+                y[li[k]] -= lv[k] * yj
+    for j in range(n - 1, -1, -1):          # U y = y, column by column from the last
+        d = 0.0
+        for k in range(up[j], up[j + 1]):
+            if ui[k] == j:
+                d = uv[k]
+        yj = y[j] / d
+        y[j] = yj
+        for k in range(up[j], up[j + 1]):
+            if ui[k] < j:
+                y[ui[k]] -= uv[k] * yj
+    for i in range(n):
+        x[i] = y[perm[n + i]]

@@ -21,9 +21,10 @@ from numba import njit
 
 from . import guard_cache
 from .charts import increment, rot_rates, se3_rates, translation, usage
+from .linalg import lu_solve
 from .rotations import cross, from_quat, qmul, rotate, to_quat
 
-guard_cache(__file__)
+guard_cache(__file__, extra=(__file__.replace("stage.py", "linalg.py"),))
 
 # columns of the body table
 PARAM, SE3, CHART, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
@@ -372,3 +373,37 @@ def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     for j in range(V.shape[0]):
         sq += V[j] * V[j]
     return 0.0, s5, s3, num, den, sq
+
+
+@njit(cache=True, error_model="numpy")
+def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r):
+    """One Newton update of generalized-α's residual in forces with a constant mass matrix
+    (CSR ``mp, mi, mv``) and no SE(3) body: r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (A
+    dense, nc x n), then z -= J⁻¹ r with the sparse LU factors of J (:func:`.linalg.lu_solve`'s
+    arguments). Returns |ΔẆ|², or -1 when r is not finite (z untouched). The numpy
+    reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
+    tests hold them equal."""
+    n, nc = Q.shape[0], g.shape[0]
+    s = 0.0
+    for i in range(n):
+        acc = -Q[i]
+        for k in range(mp[i], mp[i + 1]):
+            acc += mv[k] * z[mi[k]]
+        for k in range(nc):
+            acc += A[k, i] * z[n + k]
+        r[i] = acc
+        s += acc * acc
+    for k in range(nc):
+        r[n + k] = cg * g[k]
+        s += r[n + k] * r[n + k]
+    if not math.isfinite(s):
+        return -1.0
+    m = n + nc
+    dz = np.empty(m)
+    lu_solve(lp, li, lv, up, ui, uv, perm, r, dz)
+    d2 = 0.0
+    for i in range(m):
+        z[i] -= dz[i]
+        if i < n:
+            d2 += dz[i] * dz[i]
+    return d2

@@ -79,3 +79,21 @@ def test_not_positive_definite_is_reported(rng):
     S[2, 2] = -1.0
     ok, dmin, dmax = cholesky(S.ravel().copy(), 4, np.zeros(0, np.int64))
     assert not ok and dmin == 0.0
+
+
+@pytest.mark.parametrize("n,density", [(1, 1.0), (7, 0.5), (60, 0.08), (300, 0.02)])
+def test_lu_solve_equals_superlu(n, density):
+    """The compiled triangular solves on SuperLU's factors give SuperLU's own solution (the
+    reference) on random nonsymmetric sparse matrices, whose pivoting permutes rows and
+    columns; and that solution solves A x = b."""
+    from scipy import sparse
+    from scipy.sparse.linalg import splu
+    from lgt_bridge.integrators.genalpha_matrix import _lu_solver
+    rng = np.random.default_rng(n)
+    A = (sparse.random(n, n, density=density, random_state=rng) + sparse.diags(rng.normal(size=n))).tocsc()
+    lu = splu(A)
+    b = rng.normal(size=n)
+    x = _lu_solver(lu)(b)
+    ref = lu.solve(b)
+    assert np.abs(x - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
+    assert np.abs(A @ x - b).max() <= 1e-10 * (1.0 + np.abs(b).max()) * (1.0 + np.abs(x).max())
