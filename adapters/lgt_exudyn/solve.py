@@ -21,6 +21,7 @@ from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
+from .engine import engine_error
 from .hooks import general_contacts
 from .model import ExudynModel
 
@@ -277,6 +278,16 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         realtime.active = False
     try:
         solver.SolveSystem(mbs, simulationSettings)
+    except LGTError:
+        raise
+    except Exception as exc:
+        # Exudyn's own loop evaluates the model too (initial accelerations before the first
+        # step, sensors, pre-/post-step user functions): a user function failing there
+        # raises Exudyn's exception, said as the bridge's own evaluations say it
+        err = engine_error(sd, "SolveDynamic's step loop", exc)
+        if err is None:
+            raise
+        raise err from exc
     finally:
         for obj, name, value in saved:
             setattr(obj, name, value)

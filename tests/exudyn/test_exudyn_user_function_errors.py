@@ -1,0 +1,43 @@
+"""A user function that fails inside Exudyn's own step loop (found running Exudyn's test
+models through ``lgt-bridge run``): the drop-in says so as a ModelError naming the user
+function and its Python error, never Exudyn's raw exception, on every kind of method."""
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from lgt_bridge.errors import ModelError  # noqa: E402
+from lgt_exudyn import SolveDynamic  # noqa: E402
+
+import exudyn_sweep_models as sm  # noqa: E402
+
+METHODS = ["dopri5", "rkmk4", "radau5", "genalpha", "scipy:RK45"]
+
+
+def _exudyns_own_error(build):
+    """Exudyn's own solver on the same model: it raises too (the model is at fault)."""
+    mbs, s = build()
+    with pytest.raises(Exception) as info:
+        exu.SolveDynamic(mbs, s)
+    assert type(info.value).__module__.startswith("exudyn")
+    return mbs.systemData.GetTime()
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_user_function_of_an_older_signature_is_a_model_error(method):
+    _exudyns_own_error(sm.spring_with_old_user_function)
+    mbs, s = sm.spring_with_old_user_function()
+    with pytest.raises(ModelError) as info:
+        SolveDynamic(mbs, s, method=method)
+    msg = str(info.value)
+    assert "springForceUserFunction" in msg and "TypeError" in msg and "fix it" in msg
+    assert "lgt_exudyn" not in msg and "lgt_bridge" not in msg.split(":", 1)[1]   # no frame of ours
+    assert "At:" not in msg                                       # Exudyn's traceback left out
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_pre_step_user_function_raising_mid_run_stops_where_exudyn_stops(method):
+    t_exudyn = _exudyns_own_error(sm.prestep_raising_at)
+    mbs, s = sm.prestep_raising_at()
+    with pytest.raises(ModelError, match=r"PreStepUserFunction.*ValueError: controller input missing"):
+        SolveDynamic(mbs, s, method=method)
+    assert mbs.systemData.GetTime() == pytest.approx(t_exudyn, abs=1e-12) == pytest.approx(0.05)
