@@ -1,11 +1,15 @@
 """A user function that fails inside Exudyn's own step loop (found running Exudyn's test
-models through ``lgt-bridge run``): the drop-in says so as a ModelError naming the user
-function and its Python error, never Exudyn's raw exception, on every kind of method."""
+models through ``lgt-bridge run``): the drop-in says so in the bridge's own error, naming
+the user function and its Python error, never Exudyn's raw exception, on every kind of
+method (in Exudyn's loop, before the first step or between steps: a ModelError; inside a
+step of the bridge: the StepError of a failed step, the state kept)."""
+import functools
+
 import pytest
 
 exu = pytest.importorskip("exudyn")
 
-from lgt_bridge.errors import ModelError  # noqa: E402
+from lgt_bridge.errors import LGTError, ModelError  # noqa: E402
 from lgt_exudyn import SolveDynamic  # noqa: E402
 
 import exudyn_sweep_models as sm  # noqa: E402
@@ -22,15 +26,17 @@ def _exudyns_own_error(build):
     return mbs.systemData.GetTime()
 
 
+@pytest.mark.parametrize("sensor", [False, True], ids=["no-outputs", "acceleration-sensor"])
 @pytest.mark.parametrize("method", METHODS)
-def test_a_user_function_of_an_older_signature_is_a_model_error(method):
-    _exudyns_own_error(sm.spring_with_old_user_function)
-    mbs, s = sm.spring_with_old_user_function()
-    with pytest.raises(ModelError) as info:
+def test_a_user_function_of_an_older_signature_is_the_bridges_error(method, sensor):
+    build = functools.partial(sm.spring_with_old_user_function, acceleration_sensor=sensor)
+    _exudyns_own_error(build)
+    mbs, s = build()
+    with pytest.raises(LGTError) as info:
         SolveDynamic(mbs, s, method=method)
     msg = str(info.value)
     assert "springForceUserFunction" in msg and "TypeError" in msg and "fix it" in msg
-    assert "lgt_exudyn" not in msg and "lgt_bridge" not in msg.split(":", 1)[1]   # no frame of ours
+    assert "Python file" not in msg and "lgt_exudyn" not in msg   # no pointer to a frame of ours
     assert "At:" not in msg                                       # Exudyn's traceback left out
 
 

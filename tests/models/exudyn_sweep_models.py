@@ -8,8 +8,9 @@ assembled.
   (Exudyn's connectorRigidBodySpringDamperTest.py of an older version);
 - a pre-step user function that raises in the middle of the run.
 """
+import exudyn as exu
 from exudyn.utilities import (CoordinateSpringDamper, MarkerNodeCoordinate, MassPoint, NodePoint,
-                              NodePointGround)
+                              NodePointGround, SensorNode)
 
 from exudyn_special_models import _system, settings  # the shared system and settings
 
@@ -25,15 +26,20 @@ def _oscillator(mbs, **spring):
     return node
 
 
-def spring_with_old_user_function(t_end=0.1, n=10):
+def spring_with_old_user_function(t_end=0.1, n=10, acceleration_sensor=False):
     """The spring's force as a user function written for an older Exudyn, without
-    ``itemIndex``: every call raises Exudyn's ModelError (a TypeError inside)."""
+    ``itemIndex``: every call raises Exudyn's ModelError (a TypeError inside).
+    ``acceleration_sensor``: the mass's acceleration recorded by a sensor (Exudyn then
+    computes the initial accelerations itself, before the first step)."""
     mbs = _system()
 
     def force(mbs, t, u, v, k, d, offset):          # Exudyn < 1.2's signature
         return k * u + d * v
 
-    _oscillator(mbs, springForceUserFunction=force)
+    node = _oscillator(mbs, springForceUserFunction=force)
+    if acceleration_sensor:
+        mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+                                 outputVariableType=exu.OutputVariableType.Acceleration))
     mbs.Assemble()
     return mbs, settings(t_end, n)
 
