@@ -2,10 +2,14 @@
 object set up to write no files and no sensors), state writes, the algebraic equations'
 residual and Jacobian, and Exudyn's exceptions turned into ModelErrors."""
 import functools
+import re
 
 import numpy as np
 
 from lgt_bridge.errors import LGTError, ModelError
+
+
+_OWN_FRAME = re.compile(r"\s*\[Python file '[^']*(?:lgt_exudyn|lgt_bridge)[^']*', line \d+\]")
 
 
 def exudyn():
@@ -22,11 +26,14 @@ def engine_error(sd, what, exc):
     text = str(exc).split("\nAt:")[0]           # Exudyn appends a traceback after "At:"
     lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
     msg = " ".join(lines) if lines else type(exc).__name__
+    # Exudyn names the Python frame running when the user function failed: the bridge's
+    # own file, not the user's; drop that pointer (the user function's name stays)
+    msg = _OWN_FRAME.sub("", msg)
     if len(msg) > 300:
         msg = msg[:300] + "..."
-    t = sd.GetTime()
+    t, stop = sd.GetTime(), "" if msg.endswith((".", "!", "?")) else "."
     return ModelError(f"Exudyn raised while lgt_bridge evaluated the model ({what}) at "
-                      f"t = {t:.9g}: {msg}. If a user function failed, "
+                      f"t = {t:.9g}: {msg}{stop} If a user function failed, "
                       "fix it (run the script with Exudyn's own solver to see it in context).")
 
 

@@ -21,6 +21,7 @@ from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
+from .engine import engine_error
 from .hooks import general_contacts
 from .model import ExudynModel
 
@@ -215,6 +216,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # pre-step user functions: the residual where the last step ended, to see offsets moved
     g_end = [model.holonomic_residual(sim.q, sim.t)] if prestep else None
     rebuilt = [0]
+    pending = []            # an exception inside the step, re-raised after Exudyn's loop
 
     def newton(solver, mbs_, settings):
         h = solver.it.currentStepSize
@@ -257,6 +259,16 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             model.write_back(sim.stepper.q, sim.stepper.V, sim.t)
             solver.it.endTime = sim.t          # stop Exudyn's loop at the last good state
             return True
+        except Exception as exc:
+            # Exudyn's exception from a call of the bridge (a ModelError naming it) or a bug of
+            # the bridge (its own traceback): raised after Exudyn's loop, not through it
+            err = engine_error(sd, "SolveDynamic's step", exc)
+            if err is not None:
+                err.__cause__ = exc
+            pending.append(err or exc)
+            model.write_back(sim.stepper.q, sim.stepper.V, sim.t)
+            solver.it.endTime = sim.t
+            return True
         return True
 
     reads = _outputs_read(mbs, simulationSettings)
@@ -277,10 +289,22 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         realtime.active = False
     try:
         solver.SolveSystem(mbs, simulationSettings)
+    except LGTError:
+        raise
+    except Exception as exc:
+        # Exudyn's own loop evaluates the model too (initial accelerations before the first
+        # step, sensors, pre-/post-step user functions): a user function failing there
+        # raises Exudyn's exception, said as the bridge's own evaluations say it
+        err = engine_error(sd, "SolveDynamic's step loop", exc)
+        if err is None:
+            raise
+        raise err from exc
     finally:
         for obj, name, value in saved:
             setattr(obj, name, value)
         bar.close()
+    if pending:
+        raise pending[0]
     stepper = sim.stepper
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,
