@@ -362,6 +362,40 @@ class Simulation:
             return st.q, st.V
         return st.dense(target)
 
+    def advance_to_many(self, targets, on_step=None):
+        """Step until ``targets[0]`` is reached (``targets``: increasing times); returns
+        (n, Q, V): rows of q and V at the first n ≥ 1 targets, all those the last step
+        covers, evaluated by its dense output in one call (a target the step ends on gets
+        the step's own state). Failures as :meth:`advance_to`."""
+        try:
+            return self._advance_to_many(np.asarray(targets, float), on_step)
+        except StepFailed as exc:
+            raise exc.error(str(exc)) from None
+
+    def _advance_to_many(self, targets, on_step=None):
+        first = targets[0]
+        if not self.dense:
+            q, V = self._advance_to(first, on_step)
+            return 1, np.array(q, ndmin=2), np.array(V, ndmin=2)
+        st = self.stepper
+        while self.t < first - 1e-12 * max(1.0, abs(first)):
+            self._step(self.t_end, on_step)
+        t = self.t
+        tol = 1e-12 * max(1.0, abs(t))
+        n = max(1, int(np.searchsorted(targets, t + tol, side="right")))
+        ts = targets[:n]
+        hit = np.abs(ts - t) <= tol
+        if st.dense is None or hit.all():
+            n = 1 if st.dense is None else n
+            return n, np.tile(st.q, (n, 1)), np.tile(st.V, (n, 1))
+        if not hit.any():
+            Q, V = st.dense.many(ts)
+            return n, Q, V
+        Q, V = np.empty((n, len(st.q))), np.empty((n, len(st.V)))
+        Q[hit], V[hit] = st.q, st.V
+        Q[~hit], V[~hit] = st.dense.many(ts[~hit])
+        return n, Q, V
+
     def run(self, t_end, t_eval=None, progress=None, events=None):
         """Advance from the current time to ``t_end``, collecting the states.
 
@@ -414,10 +448,12 @@ class Simulation:
         success, message = True, "reached the end of t_span"
         hook = on_step if tracker is None else tracker.hook(on_step)
         try:
-            for target in targets:
-                q_out, V_out = self._advance_to(target, hook)
-                if not record_all:
-                    ts.append(target), qs.append(np.array(q_out)), Vs.append(np.array(V_out))
+            if not record_all:          # the outputs within a step in one dense call
+                targets, i = np.asarray(targets, float), 0
+                while i < len(targets):
+                    n, Q, V = self._advance_to_many(targets[i:], hook)
+                    ts.extend(targets[i:i + n].tolist()), qs.extend(Q), Vs.extend(V)
+                    i += n
             if self.t < t1:
                 self._advance_to(t1, hook)
         except _events.Terminal as stop:      # the run ends at the event (the state moved there)

@@ -217,6 +217,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     g_end = [model.holonomic_residual(sim.q, sim.t)] if prestep else None
     rebuilt = [0]
     pending = []            # an exception inside the step, re-raised after Exudyn's loop
+    rows = _OutputRows(sim, t1)
 
     def newton(solver, mbs_, settings):
         h = solver.it.currentStepSize
@@ -241,7 +242,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                     # step applies the end time's offsets over the whole step)
                     V = sim.stepper.projector.velocities(sim.q, sim.V, sim.t)[0]
                     sim.stepper.set_state(sim.q, V)
-            q_out, V_out = sim.advance_to(ts + h, on_step)
+            q_out, V_out = rows.at(ts + h, h, on_step)
             if prestep:
                 g_end[0] = model.holonomic_residual(q_out, ts + h)
             # the state, and the accelerations (solution file, acceleration sensors) and
@@ -344,6 +345,34 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), exu.ConfigurationType.Initial)
     return True
+
+
+class _OutputRows:
+    """The states at Exudyn's step ends (its output times). When a bridge step covers
+    several of them, they are evaluated in one dense-output call
+    (:meth:`lgt_bridge.Simulation.advance_to_many`) and handed out one per Exudyn step.
+    Exudyn's step ends are predicted as its loop accumulates them (t + h, one addition per
+    step); a time that differs from the prediction (Exudyn's last step, shortened to end on
+    endTime) is evaluated on its own, so each state is the one at Exudyn's own time."""
+
+    def __init__(self, sim, t_end):
+        self.sim, self.t_end = sim, t_end
+        self.t, self.Q, self.V, self.i = (), None, None, 0
+
+    def at(self, target, h, on_step):
+        i = self.i
+        if i < len(self.t) and self.t[i] == target:
+            self.i = i + 1
+            return self.Q[i], self.V[i]
+        sim = self.sim
+        # the Exudyn steps the next bridge step may cover (sim.h: its proposed length)
+        m = max(1, min(int((self.t_end - target) / h) + 1, int(sim.h / h) + 2)) if sim.dense else 1
+        times = np.full(m, h)
+        times[0] = target
+        times = np.add.accumulate(times)
+        n, self.Q, self.V = sim.advance_to_many(times, on_step)
+        self.t, self.i = times[:n], 1
+        return self.Q[0], self.V[0]
 
 
 #: sensors that read only positions, velocities and rotations of what they name (unless

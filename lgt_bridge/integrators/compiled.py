@@ -107,6 +107,16 @@ class CompiledProblem(LocalProblem):
         self._at(X, W)
         return self._q.copy(), self._V.copy()
 
+    def states_at(self, X, W, base):
+        """As the reference, in one kernel call on the base's q_k and quaternions."""
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        W = np.ascontiguousarray(np.atleast_2d(W), dtype=float)
+        Q, V = np.empty((len(X), len(self._qk))), np.empty((len(X), self.nv))
+        q_k, pk = base
+        _k.tau_states(X, W, self.bt, self.vt, np.ascontiguousarray(q_k, dtype=float), pk, Q, V,
+                      np.empty_like(pk))
+        return Q, V
+
     def _convert(self, mode, src, W, quats):
         out = np.empty(len(src))
         _k.convert(mode, np.ascontiguousarray(src, dtype=float), np.ascontiguousarray(W, dtype=float),

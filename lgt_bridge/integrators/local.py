@@ -317,6 +317,17 @@ class LocalProblem:
         q, quats = self.configuration(X)
         return q, self.model_velocity(W, quats)
 
+    def states_at(self, X, W, base):
+        """Rows of (Q, V): (q, V) at the local states (X[r], W[r]) of the step whose base is
+        ``base`` (:meth:`snapshot`): dense output at many times. The reference evaluates
+        them one by one with :meth:`state_at`; the compiled backend in one kernel call."""
+        X, W = np.atleast_2d(X), np.atleast_2d(W)
+        Q, V = np.empty((len(X), self.layout.nq)), np.empty((len(X), self.nv))
+        with self.based_at(base):
+            for r in range(len(X)):
+                Q[r], V[r] = self.state_at(X[r], W[r])
+        return Q, V
+
     #: a stage whose velocity moved this many times farther from the step's start than
     #: the start's own acceleration predicts (h |Ẇ_0|) is an explicit step blowing up
     BLOWUP = 10.0

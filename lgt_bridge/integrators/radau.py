@@ -462,3 +462,8 @@ class RadauDense:
         y = self.local([(t - self.t0) / self.h])[0]
         with self.st.prob.based_at(self.base) as prob:
             return prob.state_at(y[:self.nX], y[self.nX:])
+
+    def many(self, ts):
+        """Rows of (Q, V) at the times ``ts``, τ of the step's base in one call."""
+        y = self.local((np.asarray(ts, float) - self.t0) / self.h)
+        return self.st.prob.states_at(y[:, :self.nX], y[:, self.nX:], self.base)

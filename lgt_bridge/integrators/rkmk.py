@@ -344,6 +344,34 @@ class DenseStep:
         with prob.based_at(self.base):
             return prob.state_at(X, W)
 
+    def many(self, ts):
+        """Rows of (Q, V) at the times ``ts`` in [t0, t1]: the polynomials at every time in
+        one product, τ of the step's base in one call (:meth:`LocalProblem.states_at`);
+        equal to calling the step at each time, to rounding."""
+        if self._F is None:
+            self._F = self._coefficients()
+        th = (np.asarray(ts, float) - self.t0) / self.h
+        kind, FX, FW = self._F
+        if kind == "P":
+            w = np.cumprod(np.repeat(th[:, None], FX.shape[0], axis=1), axis=1)
+        else:
+            w = _dop853_weights(th)
+        return self.st.prob.states_at(w @ FX, self.W0 + w @ FW, self.base)
+
+
+def _dop853_weights(x):
+    """Rows of the weights of :func:`_dop853_eval` at the step fractions ``x`` (array)."""
+    w = np.empty((len(x), 7))
+    u = 1.0 - x
+    w[:, 0] = x
+    w[:, 1] = x * u
+    w[:, 2] = w[:, 1] * x
+    w[:, 3] = w[:, 2] * u
+    w[:, 4] = w[:, 3] * x
+    w[:, 5] = w[:, 4] * u
+    w[:, 6] = w[:, 5] * x
+    return w
+
 
 def _dop853_eval(F, x):
     """Hairer's contd8 polynomial: y - y_0 at θ = x, i.e. θ (F0 + (1-θ)(F1 + θ(F2 + (1-θ)(F3

@@ -80,3 +80,9 @@ class ScipyDense:
         nX = self.prob.nX
         with self.prob.based_at(self.base) as prob:
             return prob.state_at(y[:nX], y[nX:])
+
+    def many(self, ts):
+        """Rows of (Q, V) at the times ``ts`` (scipy's interpolant is vectorized)."""
+        y = np.atleast_2d(self.sol(np.asarray(ts, float)).T)
+        nX = self.prob.nX
+        return self.prob.states_at(y[:, :nX], y[:, nX:], self.base)

@@ -188,6 +188,18 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
     return cmax
 
 
+@njit(cache=True, error_model="numpy")
+def tau_states(X, W, bt, vt, qk, pk, Q, V, p):
+    """Rows r of (Q, V): τ(q_k, X[r]) and the model velocity of W[r] for every body, the
+    dense output of one step at many times in one call (``p``: (nb, 4) scratch for the
+    quaternions). Entries no body or vector row writes keep q_k and W[r]."""
+    Xd = np.empty(X.shape[1])
+    for r in range(X.shape[0]):
+        Q[r, :] = qk
+        V[r, :] = W[r]
+        tau_state(False, X[r], W[r], bt, vt, qk, pk, Q[r], V[r], Xd, p, False)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def convert(mode, src, W, p, bt, out):
     """Velocity representations of SE(3) bodies (other entries copied):

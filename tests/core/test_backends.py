@@ -80,6 +80,12 @@ def test_stage_kernels_equal_numpy(group, chart, rng):
         q0, p0 = ref.configuration(X)
         q1, p1 = comp.configuration(X)
         assert close(q1, q0), np.abs(q1 - q0).max()
+        # dense output at many times: one kernel call against the reference's state_at per row
+        Xs, Ws = X * np.array([[0.0], [0.4], [1.0]]), W + rng.normal(size=(3, ref.nv))
+        Qr, Vr = ref.states_at(Xs, Ws, ref.snapshot())
+        Qc, Vc = comp.states_at(Xs, Ws, comp.snapshot())
+        assert close(Qr[1], ref.state_at(Xs[1], Ws[1])[0]) and close(Vr[2], ref.state_at(Xs[2], Ws[2])[1])
+        assert close(Qc, Qr) and close(Vc, Vr)
         assert close(comp.kinematics(X, W), ref.kinematics(X, W))
         assert close(comp.model_velocity(W, p1), ref.model_velocity(W, p0))
         assert close(comp.group_velocity(W, p1), ref.group_velocity(W, p0))

@@ -104,6 +104,25 @@ def test_many_output_times_take_no_more_steps(method):
     assert np.allclose(many.q[-1], none.q[-1], rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("method", ["dopri5", "dop853", "radau5", "scipy:DOP853"])
+def test_dense_output_at_many_times_equals_one_time_at_a_time(method):
+    """A step's dense output evaluated at many times in one call (``many``) equals it
+    evaluated at each time (``dense(t)``), to rounding, including the step's two ends."""
+    sim = Simulation(scenes.heavy_top(True), method=method, rtol=1e-8, atol=1e-8, t_end=0.2)
+    st = sim.stepper
+    if method.startswith("scipy"):
+        st.keep_dense = True
+    sim.advance_to(0.05)
+    d = st.dense
+    ts = np.linspace(d.t0, d.t1, 9)
+    Q, V = d.many(ts)
+    for k, t in enumerate(ts):
+        q, v = d(t)
+        assert np.abs(Q[k] - q).max() <= 1e-13 * max(1.0, np.abs(q).max())
+        assert np.abs(V[k] - v).max() <= 1e-13 * max(1.0, np.abs(v).max())
+    assert np.abs(Q[-1] - st.q).max() <= 1e-9        # the interpolant ends on the step's end
+
+
 def _nf_at(errors, nfs, target):
     """f evaluations at a given error, log-log interpolated along a tolerance sweep."""
     e, n = np.log(np.asarray(errors)), np.log(np.asarray(nfs, float))

@@ -81,3 +81,38 @@ def test_models_of_equal_layouts_share_their_analysis_and_a_new_layout_gets_its_
     m.layout = scenes.chain(3).layout                # (a model given another layout)
     p = make_problem(m, "SO3xR3")
     assert p.nX == 18 and p.nv == m.layout.nv
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("method", ["dopri5", "dop853", "radau5", "rkmk4"])
+def test_outputs_within_a_step_in_one_call_equal_one_by_one(method, backend, monkeypatch):
+    """run(t_eval) evaluates the output times a step covers in one dense-output call (one
+    kernel call for τ); the states equal advance_to's, which evaluates the step's dense
+    output at one time per call, to rounding — 1201 outputs, steps covering several."""
+    monkeypatch.setenv("LGT_BRIDGE_BACKEND", backend)
+    T, t_eval = 0.3, np.linspace(0.0, 0.3, 1201)
+    kw = dict(method=method, rtol=1e-6, atol=1e-6, t_end=T, dt=0.01 if method == "rkmk4" else None)
+    r = Simulation(scenes.heavy_top(True), **kw).run(T, t_eval=t_eval)
+    sim = Simulation(scenes.heavy_top(True), **kw)
+    one = [(sim.q.copy(), sim.V.copy())] + [tuple(np.array(x) for x in sim.advance_to(t)) for t in t_eval[1:]]
+    assert r.success and np.array_equal(r.t, t_eval)
+    if method != "rkmk4":
+        assert r.stats["n_steps"] < len(t_eval) // 3       # several outputs per step
+    for k, (q, V) in enumerate(one):
+        assert np.abs(r.q[k] - q).max() <= 1e-13 * max(1.0, np.abs(q).max()), k
+        assert np.abs(r.V[k] - V).max() <= 1e-13 * max(1.0, np.abs(V).max()), k
+
+
+def test_advance_to_many_returns_the_times_the_last_step_covers():
+    """advance_to_many steps to the first target and returns the states at every target up to
+    the step's end (a target on the step's end gets the step's own state), not beyond it."""
+    sim = Simulation(scenes.heavy_top(True), method="dop853", rtol=1e-8, atol=1e-8, t_end=0.3)
+    targets = np.linspace(0.001, 0.3, 300)
+    n, Q, V = sim.advance_to_many(targets)
+    assert 1 <= n < len(targets) and Q.shape == (n, len(sim.q)) and V.shape == (n, len(sim.V))
+    assert targets[n - 1] <= sim.t < targets[n]
+    d = sim.stepper.dense
+    for k in range(n):
+        q, v = d(targets[k])
+        assert np.abs(Q[k] - q).max() <= 1e-13 and np.abs(V[k] - v).max() <= 1e-12
+    n2, Q2, _ = sim.advance_to_many(np.r_[sim.t, targets[n:]])      # the step's end itself
+    assert n2 == 1 and np.array_equal(Q2[0], sim.q)
