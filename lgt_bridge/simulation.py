@@ -382,18 +382,16 @@ class Simulation:
             self._step(self.t_end, on_step)
         t = self.t
         tol = 1e-12 * max(1.0, abs(t))
-        n = max(1, int(np.searchsorted(targets, t + tol, side="right")))
-        ts = targets[:n]
-        hit = np.abs(ts - t) <= tol
-        if st.dense is None or hit.all():
-            n = 1 if st.dense is None else n
+        # targets[:k] within the step (dense output), targets[k:n] on its end (its own state)
+        n = max(1, int(targets.searchsorted(t + tol, "right")))
+        k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
+        if st.dense is None:
+            n = 1
+        if k == 0:
             return n, np.tile(st.q, (n, 1)), np.tile(st.V, (n, 1))
-        if not hit.any():
-            Q, V = st.dense.many(ts)
-            return n, Q, V
-        Q, V = np.empty((n, len(st.q))), np.empty((n, len(st.V)))
-        Q[hit], V[hit] = st.q, st.V
-        Q[~hit], V[~hit] = st.dense.many(ts[~hit])
+        Q, V = st.dense.many(targets[:k])
+        if k < n:
+            Q, V = np.concatenate([Q, np.tile(st.q, (n - k, 1))]), np.concatenate([V, np.tile(st.V, (n - k, 1))])
         return n, Q, V
 
     def run(self, t_end, t_eval=None, progress=None, events=None):

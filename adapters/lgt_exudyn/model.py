@@ -467,6 +467,23 @@ class ExudynModel(StepHooks, Model):
         if self.ode1 is not None:
             self.ode1.write(V)
 
+    def writer(self):
+        """``write(q, V, t)``: :meth:`write_back` with the kernel and Exudyn's views looked up
+        once (the drop-in writes every output step; q, V float64 C-contiguous). It falls back
+        to write_back when the model's pack was dropped (reset_caches) since."""
+        if not self._compiled or self.ode1 is not None:
+            return self.write_back
+        P = self._pack()
+        kw, T, off, w, qpos, qvel, set_time = self._kernels.write, P.T, P.off, P.w, P.qpos, P.qvel, self.sd.SetTime
+        n2, nv = self.n2, self.nv
+
+        def write(q, V, t):
+            if self._P is not P:
+                return self.write_back(q, V, t)
+            kw(T, off, w, q[:n2], V[:nv], 0.0, qpos, qvel)
+            set_time(t)
+        return write
+
     def project_initial(self, q0, V0, t0, tol=1e-12, max_iter=60):
         """The initial state moved onto the constraints as Exudyn's own solver moves it
         (:func:`.constraints.project_initial`)."""

@@ -217,11 +217,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     g_end = [model.holonomic_residual(sim.q, sim.t)] if prestep else None
     rebuilt = [0]
     pending = []            # an exception inside the step, re-raised after Exudyn's loop
-    rows = _OutputRows(sim, t1)
+    rows = _OutputRows(sim, t1, lambda: solver.it.currentStepSize)
+    t_last = t1 - 1e-12 * max(1.0, abs(t1))
+    write_back = model.writer()
 
     def newton(solver, mbs_, settings):
-        h = solver.it.currentStepSize
-        ts = sd.GetTime(exu.ConfigurationType.StartOfStep)
+        t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h
         try:
             if prestep:              # the model may have changed: no stage carried over
                 if model.rows_changed(sim.q, sim.V, sim.t):     # connectors switched on/off
@@ -237,19 +238,19 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             "solver closes them in its next step."), stacklevel=2)
                 else:
                     sim.restart()
-                if model.begin_step(sim.q, sim.t, ts + h - sim.t, g_end[0]) and sim.stepper.projector is not None:
+                if model.begin_step(sim.q, sim.t, t_out - sim.t, g_end[0]) and sim.stepper.projector is not None:
                     # an offset moved: the velocities start on the new targets (Exudyn's
                     # step applies the end time's offsets over the whole step)
                     V = sim.stepper.projector.velocities(sim.q, sim.V, sim.t)[0]
                     sim.stepper.set_state(sim.q, V)
-            q_out, V_out = rows.at(ts + h, h, on_step)
+            q_out, V_out = rows.at(t_out, on_step)
             if prestep:
-                g_end[0] = model.holonomic_residual(q_out, ts + h)
+                g_end[0] = model.holonomic_residual(q_out, t_out)
             # the state, and the accelerations (solution file, acceleration sensors) and
             # Lagrange multipliers (joint force sensors) of that state where outputs read them,
             # and for the final state
-            last = ts + h >= t1 - 1e-12 * max(1.0, abs(t1))
-            model.write_outputs(q_out, V_out, ts + h, accelerations or last, multipliers or last)
+            last = t_out >= t_last
+            model.write_outputs(q_out, V_out, t_out, accelerations or last, multipliers or last)
         except _events.Terminal as stop:       # the state is at the event: Exudyn's run ends there
             stopped.append(stop.message)
             model.write_outputs(sim.q, sim.V, sim.t, True, True)
@@ -355,23 +356,27 @@ class _OutputRows:
     step); a time that differs from the prediction (Exudyn's last step, shortened to end on
     endTime) is evaluated on its own, so each state is the one at Exudyn's own time."""
 
-    def __init__(self, sim, t_end):
-        self.sim, self.t_end = sim, t_end
+    def __init__(self, sim, t_end, step_size):
+        self.sim, self.t_end, self.step_size = sim, t_end, step_size      # step_size(): Exudyn's h
         self.t, self.Q, self.V, self.i = (), None, None, 0
 
-    def at(self, target, h, on_step):
+    def at(self, target, on_step):
+        """(q, V) at Exudyn's step end ``target``."""
         i = self.i
         if i < len(self.t) and self.t[i] == target:
             self.i = i + 1
             return self.Q[i], self.V[i]
-        sim = self.sim
+        sim, h = self.sim, self.step_size()
         # the Exudyn steps the next bridge step may cover (sim.h: its proposed length)
         m = max(1, min(int((self.t_end - target) / h) + 1, int(sim.h / h) + 2)) if sim.dense else 1
-        times = np.full(m, h)
-        times[0] = target
-        times = np.add.accumulate(times)
+        if m == 1:
+            times = np.array([target])
+        else:
+            times = np.full(m, h)
+            times[0] = target
+            times = np.add.accumulate(times)
         n, self.Q, self.V = sim.advance_to_many(times, on_step)
-        self.t, self.i = times[:n], 1
+        self.t, self.i = times[:n].tolist(), 1
         return self.Q[0], self.V[0]
 
 

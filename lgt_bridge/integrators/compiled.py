@@ -107,14 +107,13 @@ class CompiledProblem(LocalProblem):
         self._at(X, W)
         return self._q.copy(), self._V.copy()
 
-    def states_at(self, X, W, base):
+    def dense_states(self, w, FX, FW, W0, base):
         """As the reference, in one kernel call on the base's q_k and quaternions."""
-        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        W = np.ascontiguousarray(np.atleast_2d(W), dtype=float)
-        Q, V = np.empty((len(X), len(self._qk))), np.empty((len(X), self.nv))
         q_k, pk = base
-        _k.tau_states(X, W, self.bt, self.vt, np.ascontiguousarray(q_k, dtype=float), pk, Q, V,
-                      np.empty_like(pk))
+        Q, V = np.empty((len(w), len(self._qk))), np.empty((len(w), self.nv))
+        c = np.ascontiguousarray               # (one signature: C-contiguous float64)
+        _k.dense_states(c(w, dtype=float), c(FX, dtype=float), c(FW, dtype=float), c(W0, dtype=float), self.bt,
+                        self.vt, c(q_k, dtype=float), pk, Q, V)
         return Q, V
 
     def _convert(self, mode, src, W, quats):

@@ -317,11 +317,12 @@ class LocalProblem:
         q, quats = self.configuration(X)
         return q, self.model_velocity(W, quats)
 
-    def states_at(self, X, W, base):
-        """Rows of (Q, V): (q, V) at the local states (X[r], W[r]) of the step whose base is
-        ``base`` (:meth:`snapshot`): dense output at many times. The reference evaluates
-        them one by one with :meth:`state_at`; the compiled backend in one kernel call."""
-        X, W = np.atleast_2d(X), np.atleast_2d(W)
+    def dense_states(self, w, FX, FW, W0, base):
+        """Rows of (Q, V): (q, V) at the local states X = w[r] @ FX, W = W0 + w[r] @ FW (a
+        dense output's polynomials with the weights ``w`` of each time) of the step whose
+        base is ``base`` (:meth:`snapshot`). The reference evaluates them one by one with
+        :meth:`state_at`; the compiled backend in one kernel call."""
+        X, W = w @ FX, W0 + w @ FW
         Q, V = np.empty((len(X), self.layout.nq)), np.empty((len(X), self.nv))
         with self.based_at(base):
             for r in range(len(X)):

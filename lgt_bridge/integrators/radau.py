@@ -464,6 +464,9 @@ class RadauDense:
             return prob.state_at(y[:self.nX], y[self.nX:])
 
     def many(self, ts):
-        """Rows of (Q, V) at the times ``ts``, τ of the step's base in one call."""
-        y = self.local((np.asarray(ts, float) - self.t0) / self.h)
-        return self.st.prob.states_at(y[:, :self.nX], y[:, self.nX:], self.base)
+        """Rows of (Q, V) at the times ``ts``: the polynomial (weights θ, θ², θ³) and τ of
+        the step's base in one call (:meth:`LocalProblem.dense_states`)."""
+        th = (np.asarray(ts, float) - self.t0) / self.h
+        w = np.cumprod(np.repeat(th[:, None], 3, axis=1), axis=1)
+        c, nX = self.coef, self.nX
+        return self.st.prob.dense_states(w, c[:, :nX], c[:, nX:], self.W0, self.base)

@@ -309,25 +309,16 @@ class DenseStep:
         if tab.P is not None:
             P = tab.P
             return ("P", h * (P.T @ KX[:len(P)]), h * (P.T @ KW[:len(P)]))
-        A, c = tab.extra
+        rows, cs, B, cdy = _dense_tables(tab)
         ns = tab.stages
         with prob.based_at(self.base):
-            for k in range(len(c)):
-                s = ns + k
-                a = np.ascontiguousarray(A[k][:s])
-                prob.stage(KX, KW, s, a, h, self.W0, self.t0, self.t0 + c[k] * h)   # no limit passed
+            for k, (a, c) in enumerate(zip(rows, cs)):
+                prob.stage(KX, KW, ns + k, a, h, self.W0, self.t0, self.t0 + c * h)   # no limit passed
             prob.flush(KX, KW)
-        n = ns + len(c)
-        out = []
-        for K, y1, y0 in ((KX[:n], self.X1, 0.0), (KW[:n], self.W1, self.W0)):
-            dy = y1 - y0
-            F = np.empty((7, K.shape[1]))
-            F[0] = dy
-            F[1] = h * K[0] - dy
-            F[2] = 2 * dy - h * (K[ns - 1] + K[0])
-            F[3:] = h * (tab.D @ K)
-            out.append(F)
-        return ("D", out[0], out[1])
+        # Hairer's contd8 rows: F0 = Δy, F1 = hK_0 - Δy, F2 = 2Δy - h(K_{s-1} + K_0), F3.. = h D K
+        n = B.shape[1]
+        return ("D", np.outer(cdy, self.X1) + h * (B @ KX[:n]),
+                np.outer(cdy, self.W1 - self.W0) + h * (B @ KW[:n]))
 
     def __call__(self, t):
         """(q, V) at t in [t0, t1] (τ of the step's base)."""
@@ -345,32 +336,40 @@ class DenseStep:
             return prob.state_at(X, W)
 
     def many(self, ts):
-        """Rows of (Q, V) at the times ``ts`` in [t0, t1]: the polynomials at every time in
-        one product, τ of the step's base in one call (:meth:`LocalProblem.states_at`);
-        equal to calling the step at each time, to rounding."""
+        """Rows of (Q, V) at the times ``ts`` in [t0, t1]: the polynomials and τ of the
+        step's base at every time in one call (:meth:`LocalProblem.dense_states`); equal
+        to calling the step at each time, to rounding."""
         if self._F is None:
             self._F = self._coefficients()
         th = (np.asarray(ts, float) - self.t0) / self.h
         kind, FX, FW = self._F
-        if kind == "P":
-            w = np.cumprod(np.repeat(th[:, None], FX.shape[0], axis=1), axis=1)
-        else:
-            w = _dop853_weights(th)
-        return self.st.prob.states_at(w @ FX, self.W0 + w @ FW, self.base)
+        # the polynomials' weights: θ^(k+1) (dopri5), Hairer's contd8 products (dop853)
+        f = np.empty((len(th), FX.shape[0]))
+        f[:] = th[:, None]
+        if kind == "D":
+            f[:, 1::2] = 1.0 - f[:, 1::2]
+        w = np.cumprod(f, axis=1)
+        return self.st.prob.dense_states(w, FX, FW, self.W0, self.base)
 
 
-def _dop853_weights(x):
-    """Rows of the weights of :func:`_dop853_eval` at the step fractions ``x`` (array)."""
-    w = np.empty((len(x), 7))
-    u = 1.0 - x
-    w[:, 0] = x
-    w[:, 1] = x * u
-    w[:, 2] = w[:, 1] * x
-    w[:, 3] = w[:, 2] * u
-    w[:, 4] = w[:, 3] * x
-    w[:, 5] = w[:, 4] * u
-    w[:, 6] = w[:, 5] * x
-    return w
+_DENSE = {}
+
+
+def _dense_tables(tab):
+    """DOP853's dense output, made once per tableau: the extra stages' A rows (contiguous)
+    and c, and (B, cdy) with contd8's rows F = cdy ⊗ Δy + h B K."""
+    got = _DENSE.get(id(tab))
+    if got is None or got[0] is not tab:
+        A, c = tab.extra
+        ns = tab.stages
+        n = ns + len(c)
+        B = np.zeros((7, n))
+        B[1, 0] = 1.0
+        B[2, 0] = B[2, ns - 1] = -1.0
+        B[3:] = tab.D
+        got = _DENSE[id(tab)] = (tab, [np.ascontiguousarray(A[k][:ns + k], float) for k in range(len(c))],
+                                 [float(x) for x in c], B, np.array([1.0, -1.0, 2.0, 0.0, 0.0, 0.0, 0.0]))
+    return got[1:]
 
 
 def _dop853_eval(F, x):

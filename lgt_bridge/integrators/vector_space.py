@@ -82,7 +82,7 @@ class ScipyDense:
             return prob.state_at(y[:nX], y[nX:])
 
     def many(self, ts):
-        """Rows of (Q, V) at the times ``ts`` (scipy's interpolant is vectorized)."""
-        y = np.atleast_2d(self.sol(np.asarray(ts, float)).T)
-        nX = self.prob.nX
-        return self.prob.states_at(y[:, :nX], y[:, nX:], self.base)
+        """Rows of (Q, V) at the times ``ts``, one at a time (scipy's dense output is kept
+        for events only)."""
+        out = [self(t) for t in ts]
+        return np.array([q for q, _ in out]), np.array([V for _, V in out])

@@ -189,15 +189,28 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
 
 
 @njit(cache=True, error_model="numpy")
-def tau_states(X, W, bt, vt, qk, pk, Q, V, p):
-    """Rows r of (Q, V): τ(q_k, X[r]) and the model velocity of W[r] for every body, the
-    dense output of one step at many times in one call (``p``: (nb, 4) scratch for the
-    quaternions). Entries no body or vector row writes keep q_k and W[r]."""
-    Xd = np.empty(X.shape[1])
-    for r in range(X.shape[0]):
+def dense_states(w, FX, FW, W0, bt, vt, qk, pk, Q, V):
+    """Rows r of (Q, V) at the local states X = Σ_i w[r, i] FX[i], W = W0 + Σ_i w[r, i] FW[i]:
+    τ(q_k, X) and the model velocity of W for every body — a step's dense output at many
+    times in one call. Entries no body or vector row writes keep q_k and W."""
+    nX, nv = FX.shape[1], FW.shape[1]
+    X, W, Xd, p = np.empty(nX), np.empty(nv), np.empty(nX), np.empty((bt.shape[0], 4))
+    for r in range(w.shape[0]):
+        for j in range(nX):
+            X[j] = 0.0
+        for j in range(nv):
+            W[j] = 0.0
+        for i in range(w.shape[1]):
+            wi = w[r, i]
+            for j in range(nX):
+                X[j] += wi * FX[i, j]
+            for j in range(nv):
+                W[j] += wi * FW[i, j]
+        for j in range(nv):
+            W[j] += W0[j]
         Q[r, :] = qk
-        V[r, :] = W[r]
-        tau_state(False, X[r], W[r], bt, vt, qk, pk, Q[r], V[r], Xd, p, False)
+        V[r, :] = W
+        tau_state(False, X, W, bt, vt, qk, pk, Q[r], V[r], Xd, p, False)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

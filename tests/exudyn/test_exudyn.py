@@ -352,7 +352,7 @@ def test_drop_in_outputs_of_a_step_in_one_call_equal_one_at_a_time_and_exudyns_o
     batched, mbs = _top_sensor_run(n, T, t0, **kw)
     st = mbs.sys["lgtBridgeStats"]
     assert st["success"] and st["n_steps"] < n / 2           # several output steps per bridge step
-    monkeypatch.setattr(solve._OutputRows, "at", lambda self, t, h, on_step: self.sim.advance_to(t, on_step))
+    monkeypatch.setattr(solve._OutputRows, "at", lambda self, t, on_step: self.sim.advance_to(t, on_step))
     single, _ = _top_sensor_run(n, T, t0, **kw)
     assert np.array_equal(batched[:, 0], single[:, 0]) and len(batched) == n + 1
     assert np.abs(batched[:, 1:] - single[:, 1:]).max() <= 1e-13 * np.abs(single[:, 1:]).max()
