@@ -121,7 +121,10 @@ class StepHooks:
         Euler-parameter normalizations (τ keeps quaternions unit: no reaction) get 0."""
         nae = self.engine.nae if multipliers else 0
         if not accelerations and not nae:
-            self.write_back(q, V, t)
+            write = self.__dict__.get("_writer")       # (every output step: looked up once)
+            if write is None:
+                write = self._writer = self.writer()
+            write(q, V, t)
             return
         Vd = self.f(q, V, t)
         q2, V2 = q[:self.n2], V[:self.nv]

@@ -177,11 +177,21 @@ class NodeLayout:
 
     def H_pinv(self, q):
         """The pseudo-inverse of H(q), block by block (H is a permutation of per-node
-        blocks: identities and each rotation's 4x3 or 3x3 block)."""
+        blocks: identities and each rotation's 4x3 or 3x3 block). Euler parameters in closed
+        form: their block B = ½[-pᵥᵀ; p₀I + p̂ᵥ] has BᵀB = ¼|p|² I, so B⁺ = 4Bᵀ/|p|²; the
+        rotation vector's block is the identity; Rxyz (singular at θ₁ = ±π/2) by SVD."""
         Hp = np.zeros((self.nv, self.n2))
         Hp[self.lin_v, self.pos_q] = 1.0
         for typ, (rq, wv) in self.types.items():
-            Hp[wv[:, :, None], rq[:, None, :]] = np.linalg.pinv(self.rot_blocks(typ, q[rq]))
+            if typ == "RigidBodyEP":
+                rot = q[rq]
+                B = self.rot_blocks(typ, rot)
+                inv = 4.0 * B.transpose(0, 2, 1) / (rot * rot).sum(axis=1)[:, None, None]
+            elif typ == "RigidBodyRxyz":
+                inv = np.linalg.pinv(self.rot_blocks(typ, q[rq]))
+            else:
+                inv = np.broadcast_to(np.eye(3), (len(rq), 3, 3))
+            Hp[wv[:, :, None], rq[:, None, :]] = inv
         Hp[self.vv, self.vq] = 1.0
         return Hp
 

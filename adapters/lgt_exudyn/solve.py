@@ -219,7 +219,6 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     pending = []            # an exception inside the step, re-raised after Exudyn's loop
     rows = _OutputRows(sim, t1, lambda: solver.it.currentStepSize)
     t_last = t1 - 1e-12 * max(1.0, abs(t1))
-    write_back = model.writer()
 
     def newton(solver, mbs_, settings):
         t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h

@@ -411,3 +411,33 @@ def test_drop_in_writes_accelerations_only_where_an_output_reads_them(monkeypatc
     velocity = runs["velocity"]
     assert velocity[1] == [False] * (n_out - 1) + [True] and velocity[2] == [False] * (n_out - 1) + [True]
     assert np.abs(velocity[3] - runs["auto"][3]).max() < 1e-12 * (1 + np.abs(runs["auto"][3]).max())
+
+
+def test_H_pinv_and_the_constant_mass_check_against_their_references(monkeypatch):
+    """NodeLayout.H_pinv (closed forms for Euler-parameter and rotation-vector blocks) equals
+    numpy's pseudo-inverse of H, also for a quaternion 1 % off unit norm; constant_twist_mass
+    finds the same M̄ with dense products (small systems) as with sparse ones, and M̄ is
+    Hᵀ M H of Exudyn's own mass matrix."""
+    from lgt_exudyn import model as model_mod
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    rng = np.random.default_rng(3)
+    for node in (em.EP, em.ROTVEC, em.RXYZ, em.EP):
+        mbs.CreateRigidBody(inertia=exu.utilities.RigidBodyInertia(mass=1.0 + rng.uniform(),
+                                                                   inertiaTensor=np.diag(rng.uniform(1, 2, 3))),
+                            nodeType=node, referencePosition=rng.normal(size=3),
+                            initialAngularVelocity=rng.normal(size=3), gravity=[0, 0, -9.81])
+    mbs.Assemble()
+    m = ExudynModel(mbs)
+    nodes = m.nodes
+    q = nodes.moved(m.q0[:m.n2], rng.normal(size=m.nv), 0.8)
+    np.testing.assert_allclose(nodes.H_pinv(q), np.linalg.pinv(nodes.H(q)), atol=1e-13)
+    off = q.copy()
+    off[list(m.layout.bodies[0].rot)] *= 1.01
+    np.testing.assert_allclose(nodes.H_pinv(off), np.linalg.pinv(nodes.H(off)), atol=1e-13)
+    dense = model_mod.constant_twist_mass(m.engine, nodes, m.q0[:m.n2])
+    monkeypatch.setattr(model_mod, "DENSE_MASS_CHECK", 0)
+    sparse = model_mod.constant_twist_mass(m.engine, nodes, m.q0[:m.n2])
+    assert dense is not None and np.abs(dense - sparse).max() <= 1e-14 * np.abs(dense).max()
+    H = nodes.H(m.q0[:m.n2])
+    np.testing.assert_allclose(dense, H.T @ m.engine.mass_matrix() @ H, atol=1e-13)
