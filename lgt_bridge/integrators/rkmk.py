@@ -349,7 +349,7 @@ class DenseStep:
         if kind == "D":
             f[:, 1::2] = 1.0 - f[:, 1::2]
         w = np.cumprod(f, axis=1)
-        return self.st.prob.dense_states(w, FX, FW, self.W0, self.base)
+        return self.prob.dense_states(w, FX, FW, self.W0, self.base)
 
 
 _DENSE = {}

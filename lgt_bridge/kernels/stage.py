@@ -188,31 +188,6 @@ def tau_state(start, X, W, bt, vt, qk, pk, q, V, Xd, p, kin):
     return cmax
 
 
-@njit(cache=True, error_model="numpy")
-def dense_states(w, FX, FW, W0, bt, vt, qk, pk, Q, V):
-    """Rows r of (Q, V) at the local states X = Σ_i w[r, i] FX[i], W = W0 + Σ_i w[r, i] FW[i]:
-    τ(q_k, X) and the model velocity of W for every body — a step's dense output at many
-    times in one call. Entries no body or vector row writes keep q_k and W."""
-    nX, nv = FX.shape[1], FW.shape[1]
-    X, W, Xd, p = np.empty(nX), np.empty(nv), np.empty(nX), np.empty((bt.shape[0], 4))
-    for r in range(w.shape[0]):
-        for j in range(nX):
-            X[j] = 0.0
-        for j in range(nv):
-            W[j] = 0.0
-        for i in range(w.shape[1]):
-            wi = w[r, i]
-            for j in range(nX):
-                X[j] += wi * FX[i, j]
-            for j in range(nv):
-                W[j] += wi * FW[i, j]
-        for j in range(nv):
-            W[j] += W0[j]
-        Q[r, :] = qk
-        V[r, :] = W
-        tau_state(False, X, W, bt, vt, qk, pk, Q[r], V[r], Xd, p, False)
-
-
 @njit(cache=True, error_model="numpy", inline="always")
 def convert(mode, src, W, p, bt, out):
     """Velocity representations of SE(3) bodies (other entries copied):
@@ -272,7 +247,33 @@ def tables(I):
     return I[15:o].reshape((nb, NCOL)), I[o:o + 4 * nv].reshape((nv, 4)), I[:13]
 
 
-_V, _VC, _MC, _IC = "float64[:]", "float64[::1]", "float64[:, ::1]", "int64[::1]"
+_V, _VC, _MC, _IC, _IMC = "float64[:]", "float64[::1]", "float64[:, ::1]", "int64[::1]", "int64[:, ::1]"
+
+
+@njit(f"void({_MC}, {_MC}, {_MC}, {_VC}, {_IMC}, {_IMC}, {_VC}, {_MC}, {_MC}, {_MC})", cache=True,
+      error_model="numpy")
+def dense_states(w, FX, FW, W0, bt, vt, qk, pk, Q, V):
+    """Rows r of (Q, V) at the local states X = Σ_i w[r, i] FX[i], W = W0 + Σ_i w[r, i] FW[i]:
+    τ(q_k, X) and the model velocity of W for every body — a step's dense output at many
+    times in one call. Entries no body or vector row writes keep q_k and W."""
+    nX, nv = FX.shape[1], FW.shape[1]
+    X, W, Xd, p = np.empty(nX), np.empty(nv), np.empty(nX), np.empty((bt.shape[0], 4))
+    for r in range(w.shape[0]):
+        for j in range(nX):
+            X[j] = 0.0
+        for j in range(nv):
+            W[j] = 0.0
+        for i in range(w.shape[1]):
+            wi = w[r, i]
+            for j in range(nX):
+                X[j] += wi * FX[i, j]
+            for j in range(nv):
+                W[j] += wi * FW[i, j]
+        for j in range(nv):
+            W[j] += W0[j]
+        Q[r, :] = qk
+        V[r, :] = W
+        tau_state(False, X, W, bt, vt, qk, pk, Q[r], V[r], Xd, p, False)
 
 
 # explicit signatures (V̇ and the weights of any layout; the buffers C-contiguous): one
