@@ -181,14 +181,22 @@ def sparse_values(model, P, q):
     return sp.aval
 
 
+#: constraint_schur returns A dense up to this many entries nc x nv, as scipy CSR above
+DENSE_SCHUR_A = 2500
+
+
 def constraint_schur(model, P, q):
     """(A, correct) of ``Model.constraint_schur`` from the sparse rows: A as a scipy CSR
-    matrix, correct(r) = M̄⁻¹Aᵀ(A M̄⁻¹ Aᵀ)⁻¹ r by :func:`.kernel_sparse.sparse_correction` (the
+    matrix (dense up to DENSE_SCHUR_A entries), correct(r) = M̄⁻¹Aᵀ(A M̄⁻¹ Aᵀ)⁻¹ r by :func:`.kernel_sparse.sparse_correction` (the
     dense minimum-norm solve when rows are redundant)."""
-    from scipy.sparse import csr_matrix
     sp, nv, nc = P.sp, P.nv, model.n_constraints
     aval = sparse_values(model, P, np.ascontiguousarray(q, float)).copy()
-    A = csr_matrix((aval, sp.acol, sp.aptr), shape=(nc, nv))
+    if nc * nv <= DENSE_SCHUR_A:          # small: a dense A (a CSR matrix costs ~15 µs to build)
+        A = np.zeros((nc, nv))
+        np.add.at(A, (sp.rows, sp.acol), aval)
+    else:
+        from scipy.sparse import csr_matrix
+        A = csr_matrix((aval, sp.acol, sp.aptr), shape=(nc, nv))
 
     def correct(r):
         out = np.empty(nv)

@@ -183,17 +183,21 @@ def test_unknown_joints_keep_the_dense_path():
 
 @pytest.mark.parametrize("name", ["chain EP", "loop RotVecLG", "revolute chain EP", "generic chain EP",
                                   "point mass on a node marker"])
-def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, rng):
+@pytest.mark.parametrize("dense_a", [True, False])
+def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, dense_a, rng, monkeypatch):
     """The projections' step (Model.constraint_schur) and the Lagrange multipliers written for
     Exudyn's sensors, from the sparse rows, against the dense defaults (lgt_bridge.model's
-    dense constraint_schur, the least-squares multipliers of the numpy backend)."""
+    dense constraint_schur, the least-squares multipliers of the numpy backend); A returned
+    dense (small systems) and as a CSR matrix."""
     from lgt_bridge.model import Model
+    monkeypatch.setattr(K, "DENSE_SCHUR_A", 10 ** 9 if dense_a else 0)
     _, m, P = build(TABLES, name)
     ref = ExudynModel(m.mbs, backend="numpy")
     for q, V, t in states(m, rng, 2):
         A, correct = m.constraint_schur(q)
         Ad, correct_d = Model.constraint_schur(ref, q)
-        assert close(A.toarray(), Ad, 1e-13)
+        assert hasattr(A, "toarray") != dense_a
+        assert close(A if dense_a else A.toarray(), Ad, 1e-13)
         r = rng.normal(size=m.n_constraints)
         tol = max(1e-12, 10 * np.finfo(float).eps * np.linalg.cond(Ad @ np.linalg.solve(m.Mbar, Ad.T)))
         assert close(correct(r), correct_d(r), tol)
