@@ -475,12 +475,11 @@ class ExudynModel(StepHooks, Model):
             return self.write_back
         P = self._pack()
         kw, T, off, w, qpos, qvel, set_time = self._kernels.write, P.T, P.off, P.w, P.qpos, P.qvel, self.sd.SetTime
-        n2, nv = self.n2, self.nv
 
-        def write(q, V, t):
+        def write(q, V, t):             # (no ODE1 part: q and V are Exudyn's ODE2 part whole)
             if self._P is not P:
                 return self.write_back(q, V, t)
-            kw(T, off, w, q[:n2], V[:nv], 0.0, qpos, qvel)
+            kw(T, off, w, q, V, 0.0, qpos, qvel)
             set_time(t)
         return write
 

@@ -310,10 +310,8 @@ class DenseStep:
             P = tab.P
             return ("P", h * (P.T @ KX[:len(P)]), h * (P.T @ KW[:len(P)]))
         rows, cs, B, cdy = _dense_tables(tab)
-        ns = tab.stages
-        with prob.based_at(self.base):
-            for k, (a, c) in enumerate(zip(rows, cs)):
-                prob.stage(KX, KW, ns + k, a, h, self.W0, self.t0, self.t0 + c * h)   # no limit passed
+        with prob.based_at(self.base):          # the extra stages (no chart limit passed)
+            prob.run_stages(KX, KW, rows, cs, tab.stages, h, self.t0, self.W0)
             prob.flush(KX, KW)
         # Hairer's contd8 rows: F0 = Δy, F1 = hK_0 - Δy, F2 = 2Δy - h(K_{s-1} + K_0), F3.. = h D K
         n = B.shape[1]
@@ -357,7 +355,8 @@ _DENSE = {}
 
 def _dense_tables(tab):
     """DOP853's dense output, made once per tableau: the extra stages' A rows (contiguous)
-    and c, and (B, cdy) with contd8's rows F = cdy ⊗ Δy + h B K."""
+    and c, indexed by stage as ``run_stages`` reads them (the first ``stages`` entries
+    unused), and (B, cdy) with contd8's rows F = cdy ⊗ Δy + h B K."""
     got = _DENSE.get(id(tab))
     if got is None or got[0] is not tab:
         A, c = tab.extra
@@ -367,8 +366,9 @@ def _dense_tables(tab):
         B[1, 0] = 1.0
         B[2, 0] = B[2, ns - 1] = -1.0
         B[3:] = tab.D
-        got = _DENSE[id(tab)] = (tab, [np.ascontiguousarray(A[k][:ns + k], float) for k in range(len(c))],
-                                 [float(x) for x in c], B, np.array([1.0, -1.0, 2.0, 0.0, 0.0, 0.0, 0.0]))
+        rows = [None] * ns + [np.ascontiguousarray(A[k][:ns + k], float) for k in range(len(c))]
+        got = _DENSE[id(tab)] = (tab, rows, [0.0] * ns + [float(x) for x in c], B,
+                                 np.array([1.0, -1.0, 2.0, 0.0, 0.0, 0.0, 0.0]))
     return got[1:]
 
 
