@@ -4,8 +4,9 @@
 with the γ differences). Imported only when used (it imports numba).
 
 * :func:`f_compiled` (model, P, q, V, t): ExudynModel.f of any model;
-* :func:`plain_f` (model, P): the same for an unconstrained model with a constant M̄, as a
-  closure with everything looked up once (forces and solve fused in ``free_rhs``);
+* :func:`plain_f` (model, P): the same for a model with a constant M̄, unconstrained or with
+  closed-form joint rows, as a closure with everything looked up once (unconstrained: forces
+  and solve fused in ``free_rhs``);
 * :func:`solve_fallback` (P, nc, Vd): finishes a ``solve`` that returned 1 (redundant
   constraints) by ``lgt_bridge.model.solve_schur`` from the buffers it left (:func:`buffers`);
 * :func:`pack` (model): the tables of :mod:`.kernel_tables` and, for a constrained model
@@ -239,15 +240,36 @@ def solve_fallback(P, nc, Vd):
 
 
 def plain_f(model, P):
-    """f of an unconstrained model with a constant M̄ packed (free bodies, trees of vector
-    coordinates): :func:`f_compiled`'s calls for that case with everything looked up once,
-    as a closure (q, V float64 C-contiguous), forces and solve in one kernel call
+    """f of a model with a constant M̄ packed, unconstrained (free bodies, trees of vector
+    coordinates) or with joints whose rows and γ are in closed form (``P.sp.joints``):
+    :func:`f_compiled`'s calls for that case with everything looked up once, as a closure
+    (q, V float64 C-contiguous); unconstrained, forces and solve in one kernel call
     (``free_rhs``). None for any other model."""
-    if model.n_constraints or not P.constant_mass or not P.nv:
+    if not P.constant_mass or not P.nv:
         return None
     S, mbs, sd = model.solver, model.mbs, model.sd
     compute, residual, set_time = S.ComputeODE2RHS, S.GetSystemResidual, sd.SetTime
     T, off, w, qpos, qvel, Qbar, nv = P.T, P.off, P.w, P.qpos, P.qvel, P.Qbar, P.nv
+    if model.n_constraints:
+        sp = P.sp
+        if sp is None or sp.joints is None:
+            return None
+        ja, jb, aval, gam, empty = sp.joints[0], sp.joints[1], sp.aval, P.gam, P.empty
+        I, io, F, fo = sp.I, sp.io, sp.F, sp.fo
+
+        def joint_f(q, V, t):
+            joint_rows(T, q, V, ja, jb, aval, gam)
+            write(T, off, w, q, V, 0.0, qpos, qvel)
+            set_time(t)
+            compute(mbs)
+            forces(T, off, w, q, V, residual(), empty, Qbar, empty)
+            model.n_eval += 1
+            Vd = np.empty(nv)
+            sp.lam_ok = sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd) == 0
+            if not sp.lam_ok:
+                sparse_fallback(model, P, q, gam, Vd)
+            return Vd
+        return joint_f
 
     def f(q, V, t):
         write(T, off, w, q, V, 0.0, qpos, qvel)

@@ -532,8 +532,8 @@ class ExudynModel(StepHooks, Model):
             P = self._P = kernels.pack(self)
             P.plain_f = plain = kernels.plain_f(self, P)
             if plain is not None and self.ode1 is None:
-                # unconstrained, constant M̄: f is the kernels' closure from now on (the
-                # same calls as _f2's, with nothing looked up per call)
+                # constant M̄, unconstrained or closed-form joint rows: f is the kernels'
+                # closure from now on (the same calls as _f2's, nothing looked up per call)
                 contiguous, sd = np.ascontiguousarray, self.sd
 
                 def f(q, V, t):

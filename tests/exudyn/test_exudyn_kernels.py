@@ -259,19 +259,24 @@ def test_interpreted_kernels_give_the_same_f():
 
 @pytest.mark.parametrize("name", ["free EP", "spring RotVecLG", "top EP"])
 def test_plain_f_of_unconstrained_models(name, rng):
-    """Unconstrained models with a constant M̄ get the kernels' closure as f (forces and solve
-    fused in free_rhs): equal to the numpy reference to 1e-13 and leaving the evaluated state
-    in Exudyn; constrained models keep f_compiled; reset_caches drops the closure with the pack."""
+    """Models with a constant M̄, unconstrained or with joints whose rows are in closed form
+    (the top's spherical joint), get the kernels' closure as f (unconstrained: forces and
+    solve fused in free_rhs): equal to the numpy reference to 1e-13 (1e-9 with a joint, whose
+    reference γ is a difference) and to f_compiled to rounding, leaving the evaluated state
+    in Exudyn; reset_caches drops the closure with the pack."""
     SC, mbs = MODELS[name]()
     m = ExudynModel(mbs)
     ref = ExudynModel(MODELS[name]()[1], backend="numpy")
     m.f(m.q0, m.V0, 0.0)                                     # builds the pack (and the closure)
-    assert ("f" in m.__dict__) == (not m.n_constraints)
+    P = m._P
+    assert "f" in m.__dict__ and (not m.n_constraints or P.sp.joints is not None)
     for q, V, t in states(m, rng):
         n = m.n_eval
         mine = m.f(list(q), V[::1], t)                       # any array-like is accepted
         assert m.n_eval == n + 1
         assert close(mine, ref.f(q, V, t), 1e-13 if not m.n_constraints else 1e-9)
+        assert close(mine, K.f_compiled(m, P, q, V, t), 1e-14)
+        m.f(q, V, t)
         assert close(m.sd.GetODE2Coordinates(), q - m.ref)
         assert close(m.sd.GetODE2Coordinates_t(), m.rates_from_twist(q, V))
         assert m.sd.GetTime() == t
