@@ -263,6 +263,17 @@ class NodeLayout:
         out[self.vq] = q[self.vq] + eps * V[self.vv]
         return out
 
+    def perturbed(self, q, rng, size):
+        """Another valid configuration near q (the constant-mass check's probes): every
+        coordinate moved by size·N(0, 1), Euler parameters normalized again (a rotation
+        vector or Rxyz angles moved are rotations as they are)."""
+        out = q + size * rng.normal(size=len(q))
+        if "RigidBodyEP" in self.types:
+            rq = self.types["RigidBodyEP"][0]
+            p = out[rq]
+            out[rq] = p / np.sqrt((p * p).sum(axis=1))[:, None]
+        return out
+
     def plus(self, q0, D):
         """q0 moved by D in Exudyn's own increments: plain addition, except RotVecLG
         rotations, R = R0 exp(Dθ) (body frame)."""

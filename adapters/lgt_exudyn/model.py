@@ -565,7 +565,7 @@ def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
         sparse = np.asarray                                 # small: dense products are cheaper
     Ms, Mbar = [], None
     for k in range(3):
-        q = q0 if k == 0 else nodes.moved(q0, rng.normal(size=nodes.nv), 0.7)
+        q = q0 if k == 0 else nodes.perturbed(q0, rng, 0.7)
         engine.sd.SetODE2Coordinates(q - engine.ref)
         M = engine.mass_matrix()
         H, Hp = sparse(nodes.H(q)), sparse(nodes.H_pinv(q))
