@@ -137,6 +137,29 @@ class StepHooks:
             ae[self.cons.ae_keep] = lam
             self.sd.SetAECoordinates(ae)
 
+    @engine_call
+    def accelerations(self, q, V, t):
+        """Exudyn's ODE2 accelerations q̈_e = H V̇ + Ḣ V at (q, V, t) (the ODE1 rates are not
+        part of them)."""
+        q2, V2 = q[:self.n2], V[:self.nv]
+        Vd = self.f(q, V, t)[:self.nv]
+        return self.nodes.H(q2) @ Vd + self.nodes.Hdot_V(q2, V2)
+
+    def writer(self):
+        """``write(q, V, t)``: :meth:`write_back` with the kernel and Exudyn's views looked up
+        once (the drop-in writes every output step; q, V float64 C-contiguous). It falls back
+        to write_back when the model's pack was dropped (reset_caches) since."""
+        if not self._compiled or self.ode1 is not None:
+            return self.write_back
+        P = self._pack()
+        kw, T, off, w, qpos, qvel, set_time = self._kernels.write, P.T, P.off, P.w, P.qpos, P.qvel, self.sd.SetTime
+
+        def write(q, V, t):             # (no ODE1 part: q and V are Exudyn's ODE2 part whole)
+            if self._P is not P:
+                return self.write_back(q, V, t)
+            kw(T, off, w, q, V, 0.0, qpos, qvel)
+            set_time(t)
+        return write
 
 
 def has_prestep(mbs):

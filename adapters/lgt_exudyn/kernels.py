@@ -204,7 +204,7 @@ def constraint_schur(model, P, q):
         r = np.ascontiguousarray(r, float)
         if sparse_correction(P.T, P.off, P.w, sp.I, sp.io, sp.F, sp.fo, aval, r, out) == 0:
             return out
-        Ad = A.toarray()
+        Ad = A.toarray() if hasattr(A, "toarray") else A
         MiAt = model._solve_mass2(q, Ad.T)
         return MiAt @ solve_schur(Ad @ MiAt, r)
     return A, correct

@@ -287,6 +287,39 @@ class NodeLayout:
         return q
 
 
+#: above this many ODE2 coordinates constant_twist_mass multiplies by H and H⁺ as sparse matrices
+DENSE_MASS_CHECK = 150
+
+
+def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
+    """M̄ when the twist mass matrix is the same at q0 and two other configurations (drawn
+    from ``rng``, one generator for the process by default) and the engine's M equals
+    H⁺ᵀ M̄ H⁺ there (rigid bodies with the node at the centre of mass), else None; leaves q0
+    written."""
+    if not nodes.nv:                 # no ODE2 coordinates (a purely first-order system)
+        return np.zeros((0, 0))
+    if nodes.n2 > DENSE_MASS_CHECK:
+        from scipy.sparse import csr_matrix as sparse       # H has a few entries per row
+    else:
+        sparse = np.asarray                                 # small: dense products are cheaper
+    Ms, Mbar = [], None
+    for k in range(3):
+        q = q0 if k == 0 else nodes.perturbed(q0, rng, 0.7)
+        engine.sd.SetODE2Coordinates(q - engine.ref)
+        M = engine.mass_matrix()
+        H, Hp = sparse(nodes.H(q)), sparse(nodes.H_pinv(q))
+        Mb = np.asarray((H.T @ (H.T @ M).T).T)                         # Hᵀ M H
+        back = np.asarray((Hp.T @ (Hp.T @ Mb).T).T)                    # H⁺ᵀ M̄ H⁺
+        if np.abs(M - back).max() > 1e-12 * max(1.0, np.abs(M).max()):
+            break
+        Ms.append(Mb)
+    else:
+        if all(np.abs(m - Ms[0]).max() <= 1e-12 * max(1.0, np.abs(Ms[0]).max()) for m in Ms):
+            Mbar = 0.5 * (Ms[0] + Ms[0].T)
+    engine.sd.SetODE2Coordinates(q0 - engine.ref)
+    return Mbar
+
+
 def _check_euler_parameters(b, q0, ref):
     """InputError when a node's total Euler parameters (reference + initial: Exudyn adds
     them component-wise) are not a unit quaternion, showing both parts."""

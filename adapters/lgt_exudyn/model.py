@@ -19,7 +19,7 @@ from lgt_bridge.model import Model, combine_iteration, solve_kkt
 from . import constraints as _constraints
 from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error
-from .layout import NodeLayout
+from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
 from .ode1 import ODE1States
 
@@ -447,14 +447,6 @@ class ExudynModel(StepHooks, Model):
             return np.zeros(0)
         return self.cons.gamma(q[:self.n2], V[:self.nv], self.sd.GetTime() if t is None else t)
 
-    @engine_call
-    def accelerations(self, q, V, t):
-        """Exudyn's ODE2 accelerations q̈_e = H V̇ + Ḣ V at (q, V, t) (the ODE1 rates are not
-        part of them)."""
-        q2, V2 = q[:self.n2], V[:self.nv]
-        Vd = self.f(q, V, t)[:self.nv]
-        return self.nodes.H(q2) @ Vd + self.nodes.Hdot_V(q2, V2)
-
     def write_back(self, q, V, t):
         q2, V2 = q[:self.n2], V[:self.nv]
         if self._compiled:
@@ -466,22 +458,6 @@ class ExudynModel(StepHooks, Model):
             self.engine.write(q2, self.nodes.rates_from_twist(q2, V2), t)
         if self.ode1 is not None:
             self.ode1.write(V)
-
-    def writer(self):
-        """``write(q, V, t)``: :meth:`write_back` with the kernel and Exudyn's views looked up
-        once (the drop-in writes every output step; q, V float64 C-contiguous). It falls back
-        to write_back when the model's pack was dropped (reset_caches) since."""
-        if not self._compiled or self.ode1 is not None:
-            return self.write_back
-        P = self._pack()
-        kw, T, off, w, qpos, qvel, set_time = self._kernels.write, P.T, P.off, P.w, P.qpos, P.qvel, self.sd.SetTime
-
-        def write(q, V, t):             # (no ODE1 part: q and V are Exudyn's ODE2 part whole)
-            if self._P is not P:
-                return self.write_back(q, V, t)
-            kw(T, off, w, q, V, 0.0, qpos, qvel)
-            set_time(t)
-        return write
 
     def project_initial(self, q0, V0, t0, tol=1e-12, max_iter=60):
         """The initial state moved onto the constraints as Exudyn's own solver moves it
@@ -496,6 +472,10 @@ class ExudynModel(StepHooks, Model):
         Cholesky factors of its diagonal blocks, for all later runs."""
         from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self.Mbar is not None:
+            if self._Mbar_pd is None and self._compiled and self.ode1 is None:
+                # the kernels' pack (built for the first f anyway) inverted M̄'s blocks
+                # through their Cholesky factors: when it could, M̄ is positive definite
+                self._Mbar_pd = True if self._pack().constant_mass else None
             if self._Mbar_pd is None:
                 from .kernel_tables import positive_definite
                 self._Mbar_pd = positive_definite(self.Mbar)
@@ -546,36 +526,3 @@ class ExudynModel(StepHooks, Model):
                         raise err from exc
                 self.f = f
         return self._P
-
-
-#: above this many ODE2 coordinates constant_twist_mass multiplies by H and H⁺ as sparse matrices
-DENSE_MASS_CHECK = 150
-
-
-def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
-    """M̄ when the twist mass matrix is the same at q0 and two other configurations (drawn
-    from ``rng``, one generator for the process by default) and the engine's M equals
-    H⁺ᵀ M̄ H⁺ there (rigid bodies with the node at the centre of mass), else None; leaves q0
-    written."""
-    if not nodes.nv:                 # no ODE2 coordinates (a purely first-order system)
-        return np.zeros((0, 0))
-    if nodes.n2 > DENSE_MASS_CHECK:
-        from scipy.sparse import csr_matrix as sparse       # H has a few entries per row
-    else:
-        sparse = np.asarray                                 # small: dense products are cheaper
-    Ms, Mbar = [], None
-    for k in range(3):
-        q = q0 if k == 0 else nodes.perturbed(q0, rng, 0.7)
-        engine.sd.SetODE2Coordinates(q - engine.ref)
-        M = engine.mass_matrix()
-        H, Hp = sparse(nodes.H(q)), sparse(nodes.H_pinv(q))
-        Mb = np.asarray((H.T @ (H.T @ M).T).T)                         # Hᵀ M H
-        back = np.asarray((Hp.T @ (Hp.T @ Mb).T).T)                    # H⁺ᵀ M̄ H⁺
-        if np.abs(M - back).max() > 1e-12 * max(1.0, np.abs(M).max()):
-            break
-        Ms.append(Mb)
-    else:
-        if all(np.abs(m - Ms[0]).max() <= 1e-12 * max(1.0, np.abs(Ms[0]).max()) for m in Ms):
-            Mbar = 0.5 * (Ms[0] + Ms[0].T)
-    engine.sd.SetODE2Coordinates(q0 - engine.ref)
-    return Mbar

@@ -418,7 +418,7 @@ def test_H_pinv_and_the_constant_mass_check_against_their_references(monkeypatch
     numpy's pseudo-inverse of H, also for a quaternion 1 % off unit norm; constant_twist_mass
     finds the same M̄ with dense products (small systems) as with sparse ones, and M̄ is
     Hᵀ M H of Exudyn's own mass matrix."""
-    from lgt_exudyn import model as model_mod
+    from lgt_exudyn import layout as model_mod
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     rng = np.random.default_rng(3)
