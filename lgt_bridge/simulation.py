@@ -363,10 +363,29 @@ class Simulation:
         return st.dense(target)
 
     def advance_to_many(self, targets, on_step=None):
-        """Step until ``targets[0]`` is reached (``targets``: increasing times); returns
-        (n, Q, V): rows of q and V at the first n ≥ 1 targets, all those the last step
-        covers, evaluated by its dense output in one call (a target the step ends on gets
-        the step's own state). Failures as :meth:`advance_to`."""
+        """Step until ``targets[0]`` is reached; the states at every target the last step
+        covers, from its dense output in one call (output times at engine speed).
+
+        Parameters
+        ----------
+        targets : array_like
+            Increasing times (the first ≥ the current time).
+        on_step : callable, optional
+            ``on_step(t, q, V)`` after every accepted step.
+
+        Returns
+        -------
+        n : int
+            How many of the targets the last step covers (≥ 1; 1 without dense output).
+        Q, V : ndarray
+            Rows of q and V at ``targets[:n]`` (a target the step ends on gets the step's
+            own state).
+
+        Raises
+        ------
+        lgt_bridge.StepError
+            As :meth:`advance_to`.
+        """
         try:
             return self._advance_to_many(np.asarray(targets, float), on_step)
         except StepFailed as exc:
