@@ -364,27 +364,21 @@ class Simulation:
 
     def advance_to_many(self, targets, on_step=None):
         """Step until ``targets[0]`` is reached; the states at every target the last step
-        covers, from its dense output in one call (output times at engine speed).
+        covers, from its dense output in one call (failures as :meth:`advance_to`).
 
         Parameters
         ----------
         targets : array_like
             Increasing times (the first ≥ the current time).
         on_step : callable, optional
-            ``on_step(t, q, V)`` after every accepted step.
+            As :meth:`advance_to`.
 
         Returns
         -------
         n : int
             How many of the targets the last step covers (≥ 1; 1 without dense output).
         Q, V : ndarray
-            Rows of q and V at ``targets[:n]`` (a target the step ends on gets the step's
-            own state).
-
-        Raises
-        ------
-        lgt_bridge.StepError
-            As :meth:`advance_to`.
+            Rows of q and V at ``targets[:n]`` (on the step's end: the step's own state).
         """
         try:
             return self._advance_to_many(np.asarray(targets, float), on_step)
@@ -392,25 +386,19 @@ class Simulation:
             raise exc.error(str(exc)) from None
 
     def _advance_to_many(self, targets, on_step=None):
-        first = targets[0]
         if not self.dense:
-            q, V = self._advance_to(first, on_step)
+            q, V = self._advance_to(targets[0], on_step)
             return 1, np.array(q, ndmin=2), np.array(V, ndmin=2)
-        st = self.stepper
+        st, first = self.stepper, targets[0]
         while self.t < first - 1e-12 * max(1.0, abs(first)):
             self._step(self.t_end, on_step)
-        t = self.t
-        tol = 1e-12 * max(1.0, abs(t))
-        # targets[:k] within the step (dense output), targets[k:n] on its end (its own state)
-        n = max(1, int(targets.searchsorted(t + tol, "right")))
+        t, tol = self.t, 1e-12 * max(1.0, abs(self.t))      # targets[k:n] on the step's end
+        n = 1 if st.dense is None else max(1, int(targets.searchsorted(t + tol, "right")))
         k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
-        if st.dense is None:
-            n = 1
-        if k == 0:
-            return n, np.tile(st.q, (n, 1)), np.tile(st.V, (n, 1))
-        Q, V = st.dense.many(targets[:k])
-        if k < n:
-            Q, V = np.concatenate([Q, np.tile(st.q, (n - k, 1))]), np.concatenate([V, np.tile(st.V, (n - k, 1))])
+        Q, V = np.tile(st.q, (n - k, 1)), np.tile(st.V, (n - k, 1))
+        if k:
+            (Qd, Vd) = st.dense.many(targets[:k])
+            Q, V = (Qd, Vd) if k == n else (np.concatenate([Qd, Q]), np.concatenate([Vd, V]))
         return n, Q, V
 
     def run(self, t_end, t_eval=None, progress=None, events=None):

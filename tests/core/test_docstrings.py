@@ -16,6 +16,7 @@ def _entry_points():
     yield "lgt_bridge.Simulation", lgt_bridge.Simulation, False
     yield "lgt_bridge.Simulation.run", lgt_bridge.Simulation.run, True
     yield "lgt_bridge.Simulation.advance_to", lgt_bridge.Simulation.advance_to, False
+    yield "lgt_bridge.Simulation.advance_to_many", lgt_bridge.Simulation.advance_to_many, True
     for mod, names in (("lgt_exudyn", ("ExudynModel", "SolveDynamic")), ("lgt_pinocchio", ("PinocchioModel",))):
         try:
             m = __import__(mod)
