@@ -387,8 +387,7 @@ class Simulation:
 
     def _advance_to_many(self, targets, on_step=None):
         if not self.dense:
-            q, V = self._advance_to(targets[0], on_step)
-            return 1, np.array(q, ndmin=2), np.array(V, ndmin=2)
+            return (1, *(np.array(x, ndmin=2) for x in self._advance_to(targets[0], on_step)))
         st, first = self.stepper, targets[0]
         while self.t < first - 1e-12 * max(1.0, abs(first)):
             self._step(self.t_end, on_step)
