@@ -266,8 +266,14 @@ class NodeLayout:
     def perturbed(self, q, rng, size):
         """Another valid configuration near q (the constant-mass check's probes): every
         coordinate moved by size·N(0, 1), Euler parameters normalized again (a rotation
-        vector or Rxyz angles moved are rotations as they are)."""
-        out = q + size * rng.normal(size=len(q))
+        vector or Rxyz angles moved are rotations as they are), drawn again while an Rxyz
+        node's middle angle is near ±π/2 (|cos θ₁| < 0.3: H's gimbal lock, where the check's
+        comparisons lose their digits)."""
+        rxyz = self.types["RigidBodyRxyz"][0][:, 1] if "RigidBodyRxyz" in self.types else None
+        for _ in range(50):
+            out = q + size * rng.normal(size=len(q))
+            if rxyz is None or (np.abs(np.cos(out[rxyz])) >= 0.3).all():
+                break
         if "RigidBodyEP" in self.types:
             rq = self.types["RigidBodyEP"][0]
             p = out[rq]
