@@ -391,13 +391,13 @@ class Simulation:
         st, first = self.stepper, targets[0]
         while self.t < first - 1e-12 * max(1.0, abs(first)):
             self._step(self.t_end, on_step)
-        t, tol = self.t, 1e-12 * max(1.0, abs(self.t))      # targets[k:n] on the step's end
+        t, tol = self.t, 1e-12 * max(1.0, abs(self.t))
         n = 1 if st.dense is None else max(1, int(targets.searchsorted(t + tol, "right")))
         k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
-        Q, V = np.tile(st.q, (n - k, 1)), np.tile(st.V, (n - k, 1))
-        if k:
-            (Qd, Vd) = st.dense.many(targets[:k])
-            Q, V = (Qd, Vd) if k == n else (np.concatenate([Qd, Q]), np.concatenate([Vd, V]))
+        Q, V = st.dense.many(targets[:k]) if k else (None, None)
+        if k < n:                       # the step's own state for targets on its end
+            Qe, Ve = np.tile(st.q, (n - k, 1)), np.tile(st.V, (n - k, 1))
+            Q, V = (Qe, Ve) if not k else (np.concatenate([Q, Qe]), np.concatenate([V, Ve]))
         return n, Q, V
 
     def run(self, t_end, t_eval=None, progress=None, events=None):
