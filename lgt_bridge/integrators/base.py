@@ -1,9 +1,13 @@
 """What every stepper shares: the local problem, the state, failure reporting."""
+import contextlib
 import math
 
 import numpy as np
 
 from ..errors import StepError
+
+#: the context of a problem whose arithmetic never warns (the compiled kernels'): not entered
+NULL_CONTEXT = contextlib.nullcontext()
 
 
 class StepFailed(Exception):

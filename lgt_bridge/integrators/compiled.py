@@ -7,17 +7,15 @@ derivative from the model's V̇, fused with this stage's state) and the model's 
 receives views of the work array. The bodies' quaternions ("quats") are one (N, 4) array
 instead of a list per body set.
 """
-import contextlib
-
 import numpy as np
 
 from ..kernels import entry_point
 from ..kernels import stage as _k
 from ..kernels.rotations import PARAM_CODES
+from .base import NULL_CONTEXT
 from .local import LocalProblem
 
 _NONE = np.zeros(0)
-_QUIET = contextlib.nullcontext()
 _F64 = np.dtype(np.float64)
 _NDARRAY = np.ndarray
 #: the stage and step-end kernels without type dispatch, for the steppers' own buffers
@@ -176,7 +174,7 @@ class CompiledProblem(LocalProblem):
 
     def quiet(self):
         """The kernels never warn: nothing to silence."""
-        return _QUIET
+        return NULL_CONTEXT
 
     def ga_residual(self, Vd, Wd, r, W, quats):
         """r = Ẇ - Ẇ(V̇) at the last ga_state (W, quats are its own); returns Σ r²."""

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ChartDomainError
 from . import tableaux
-from .base import ChartLimit, StepFailed, Stepper
+from .base import NULL_CONTEXT, ChartLimit, StepFailed, Stepper
 from .control import PIController, initial_step
 
 
@@ -105,8 +105,11 @@ class ExplicitRK(Stepper):
         library's own arithmetic on a diverging step (overflow, inf - inf) would warn before
         the step is reported; those floating-point warnings are silenced inside the step,
         and non-finite values are reported as StepError naming the body (the compiled
-        kernels never warn, so the compiled path pays nothing for this)."""
-        with self.prob.quiet():
+        kernels never warn: their problem's context is a null one, not entered)."""
+        quiet = self.prob.quiet()
+        if quiet is NULL_CONTEXT:
+            return self._attempt(t, h)
+        with quiet:
             return self._attempt(t, h)
 
     def run_stages(self, t, h):
@@ -176,12 +179,26 @@ class AdaptiveRK(ExplicitRK):
         self.control = PIController(*tableau.control, order=tableau.err_order)
         self._T, self._stiff_pair = _pair_constants(tableau)
         self._n = problem.nX + problem.nv
-        self.dense = None                      # DenseStep of the last accepted step
+        self._dense = None                     # DenseStep of the last accepted step (``dense``)
+        self._dense_args = None                # what makes it, kept at each accepted step
         self._hcay = np.inf                    # steps below this keep bounded charts' stages in their domain
         self.dense_capable = tableau.dense
         self.stability_bound = self.STABILITY_BOUND.get(tableau.stages, 3.25)
         self._n_stiff = self._n_nonstiff = 0
         self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
+
+    @property
+    def dense(self):
+        """The :class:`DenseStep` of the last accepted step (None before the first), made on
+        first use: most steps are never interpolated."""
+        d = self._dense
+        if d is None and self._dense_args is not None:
+            d = self._dense = DenseStep(self.tab, self.prob, *self._dense_args)
+        return d
+
+    @dense.setter
+    def dense(self, d):
+        self._dense, self._dense_args = d, None
 
     #: h·ρ at the edge of the stability region on the negative real axis, by number of
     #: stages (Hairer's values: DOPRI5 3.25, DOP853 6.1)
@@ -244,11 +261,11 @@ class AdaptiveRK(ExplicitRK):
         return abs(h) * s5 / math.sqrt((s5 + 0.01 * s3) * self._n)
 
     def _attempt(self, t, h):
-        tab = self.tab
+        prob, KX, KW = self.prob, self.KX, self.KW
         try:
             self.run_stages(t, h)
-            X1, W1, q1, V1, quats, s5, s3, num, den, sq = self.prob.end_step(
-                self.KX, self.KW, self._T, h, self.W, self.rtol, self.atol)
+            X1, W1, q1, V1, quats, s5, s3, num, den, sq = prob.end_step(
+                KX, KW, self._T, h, self.W, self.rtol, self.atol)
         except ChartLimit as lim:
             self.n_rejected += 1
             self.control.rejected()
@@ -262,29 +279,44 @@ class AdaptiveRK(ExplicitRK):
             self.n_rejected += 1              # a trial step that blew up: retry smaller
             self.control.rejected()
             return False, 0.25 * h
-        en = self.error_norm(h, s5, s3)
+        # the error norm (error_norm, inlined: this runs once per step)
+        if self.tab.e3 is None:
+            en = abs(h) * math.sqrt(s5 / self._n)
+        elif s5 == 0.0 and s3 == 0.0:
+            en = 0.0
+        else:
+            en = abs(h) * s5 / math.sqrt((s5 + 0.01 * s3) * self._n)
         if not math.isfinite(en):
             self.n_rejected += 1
             return False, 0.25 * h
-        if en <= 1.0:
+        if en > 1.0:
+            self.n_rejected += 1
+            return False, h * self.control.rejected(en)
+        if self._stiff_pair is not None:
             self._detect_stiffness(t, h, num, den)
-            fac = self.control.accepted(en)
-            if self.dense_capable:
-                self.dense = DenseStep(self, t, h, X1, W1)
-            i_last = tab.stages - 1
+        fac = self.control.accepted(en)
+        if self.dense_capable:                # the DenseStep itself is made on first use
+            self._dense = None
+            self._dense_args = (t, h, X1, W1, KX, KW, self.W, prob.snapshot())
+        if self.projector is None and sq - sq == 0.0:
+            # finish(t + h, q1, V1, W1, quats, checked=True) without projection, inlined:
+            # q1, V1, W1 are fresh arrays (views of end_step's one new array) the stepper keeps
+            self.q, self.V, self.W = q1, V1, W1
+            prob.start(q1, quats)
+            self._fsal = False
+        else:
             self.finish(t + h, q1, V1, W1, quats, checked=math.isfinite(sq))
-            # the stage buffers alternate: the dense output keeps the accepted step's stages
-            other = self._bufs[1] if self.KX is self._bufs[0][0] else self._bufs[0]
-            self._last_KW = self.KW
-            if tab.fsal and self.projector is None:
-                other[1][0] = self.KW[i_last]
-                self._fsal = True
-            self.KX, self.KW = other
-            h_new = min(h * fac, self._hcay)
-            self._hcay *= 1.2
-            return True, h_new
-        self.n_rejected += 1
-        return False, h * self.control.rejected(en)
+        # the stage buffers alternate: the dense output keeps the accepted step's stages
+        bufs = self._bufs
+        other = bufs[1] if KX is bufs[0][0] else bufs[0]
+        self._last_KW = KW
+        if self.tab.fsal and self.projector is None:
+            other[1][0] = KW[self.tab.stages - 1]
+            self._fsal = True
+        self.KX, self.KW = other
+        h_new = min(h * fac, self._hcay)
+        self._hcay *= 1.2
+        return True, h_new
 
 
 class DenseStep:
@@ -292,14 +324,15 @@ class DenseStep:
     step's own base (so it stays valid after the stepper has moved on). DOP853's three
     extra stages are computed on the first evaluation."""
 
-    def __init__(self, stepper, t, h, X1, W1):
+    def __init__(self, tab, prob, t, h, X1, W1, KX, KW, W0, base):
         # the stepper's tableau and problem, not the stepper (which holds this step as its
-        # ``dense``: no reference cycle keeping a finished run alive until the collector runs)
-        self.tab, self.prob, self.t0, self.h = stepper.tab, stepper.prob, t, h
+        # ``dense``: no reference cycle keeping a finished run alive until the collector runs);
+        # KX, KW: the step's stage buffers, W0 its start, base the problem's snapshot there
+        self.tab, self.prob, self.t0, self.h = tab, prob, t, h
         self.t1 = t + h
-        self.KX, self.KW = stepper.KX, stepper.KW
-        self.W0, self.X1, self.W1 = stepper.W, X1, W1
-        self.base = stepper.prob.snapshot()
+        self.KX, self.KW = KX, KW
+        self.W0, self.X1, self.W1 = W0, X1, W1
+        self.base = base
         self.q1, self.V1 = None, None
         self._F = None
 
