@@ -293,26 +293,3 @@ class Joints:
             out[cq] = lgt.circle_tau(q[cq], d[list(self.layout.circle_v)])
         return out
 
-
-#: what is known of a pinocchio.Model object, id -> dict (``model_memo``), the newest last
-_MEMO = {}
-_MEMO_MAX = 16
-
-
-def model_memo(pin, model):
-    """What the adapter has computed of one ``pinocchio.Model`` object while it is unchanged: a
-    dict with ``joints`` (its :class:`Joints`, made here) and ``mass_ok`` (the configurations
-    whose mass check passed), for models wrapped afresh for every run. Unchanged means equal to
-    a copy taken when the entry was made (Pinocchio's own ``Model ==``, a few µs: joints,
-    names, inertias, placements, armature, limits); a model changed since gets a new entry,
-    so everything is computed and checked again."""
-    got = _MEMO.get(id(model))
-    if got is not None and got["model"] is model and model == got["copy"]:
-        return got
-    joints = Joints(model)               # InputError for a joint it cannot step: nothing kept
-    got = {"model": model, "copy": pin.Model(model), "joints": joints, "mass_ok": set()}
-    _MEMO.pop(id(model), None)
-    if len(_MEMO) >= _MEMO_MAX:
-        _MEMO.pop(next(iter(_MEMO)))
-    _MEMO[id(model)] = got
-    return got

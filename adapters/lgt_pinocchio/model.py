@@ -30,7 +30,7 @@ from lgt_bridge.model import Model, combine_iteration
 
 from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, jacobian_fd
 from .iteration import iteration_parts
-from .joints import model_memo
+from .memo import initial_state, lend_data, model_memo
 from .loads import Loads
 from .rhs import build_f, f_numpy
 
@@ -81,23 +81,6 @@ def _check_pin_model(pin, model):
                          "its own Data with model.createData().")
     hint = " (a RobotWrapper: pass robot.model)" if isinstance(getattr(model, "model", None), pin.Model) else ""
     raise InputError(f"PinocchioModel: expected a pinocchio.Model, got a {type(model).__name__}{hint}.")
-
-
-def _initial_state(joints, pin, model, q0, v0):
-    """(q0, v0) as finite float vectors of sizes (nq, nv), valid coordinates (default: neutral, 0)."""
-    q0 = pin.neutral(model) if q0 is None else np.asarray(q0, float)
-    v0 = np.zeros(model.nv) if v0 is None else np.asarray(v0, float)
-    if q0.shape != (model.nq,) or v0.shape != (model.nv,):
-        raise InputError(f"q0/v0: expected sizes nq = {model.nq}, nv = {model.nv}; got "
-                         f"{q0.shape}, {v0.shape}.")
-    for name, arr in (("q0", q0), ("v0", v0)):
-        if not np.isfinite(arr).all():
-            i = int(np.flatnonzero(~np.isfinite(arr))[0])
-            kind = "q" if name == "q0" else "v"
-            raise InputError(f"{name}: entry {i} ({joints.joint_of(kind, i)}) is {arr[i]}; give a "
-                             "finite initial state.")
-    joints.validate(q0)
-    return q0, v0
 
 
 class PinocchioModel(Model):
@@ -169,18 +152,17 @@ class PinocchioModel(Model):
         pin = self.pin = _pin()
         _check_pin_model(pin, model)
         self.backend = _backend.name(backend)
-        # (pin.Data(model) builds the same Data as model.createData() in about half the time)
-        self.model, self.data = model, pin.Data(model)
+        self.model = model
         self.nq, self.nv = model.nq, model.nv
         self._memo = model_memo(pin, model)
+        self.data = lend_data(pin, self._memo, self, constraints)
         self.joints = self._memo["joints"]
         self.layout = self.joints.layout
         if self.joints.zyx:
             # generalized-α's analytic matrix has no blocks for G(q)⁻¹: it differences the step
             self.iteration_matrix = None
         self.loads = Loads(pin, model, tau, fext, tau_derivatives)
-        self.q0, v0 = _initial_state(self.joints, pin, model, q0, v0)
-        self.V0 = self.twist_from_v(self.q0, v0)
+        self.q0, v0, self.V0 = initial_state(self._memo, pin, model, q0, v0)
         # write_back's watch of singular configurations: times, the passage under way, the last step
         self.branch_switches, self.singular_passages, self._branch, self._last = [], [], None, None
         self._A_last = None

@@ -345,3 +345,34 @@ def test_a_model_changed_after_wrapping_is_analyzed_and_checked_again():
     pm = PinocchioModel(m)
     assert (pm.layout.nq, pm.layout.nv, pm.layout.vector_v) == (8, 7, (6,))
     assert simulate(pm, (0, 0.01), method="dop853").success
+
+
+def test_models_wrapped_afresh_share_no_data_and_reuse_their_checks():
+    """Models wrapped afresh from one pinocchio.Model: two live ones never share a Data, a
+    collected one's Data serves the next, every wrap owns its initial state, and the run of
+    a wrap on a reused Data equals the run of the first wrap (Data is scratch)."""
+    import gc
+    m = pin.buildSampleModelManipulator()
+    q0, v0 = pin.neutral(m), np.linspace(0.1, 0.6, m.nv)
+    a, b = PinocchioModel(m, q0=q0, v0=v0), PinocchioModel(m, q0=q0, v0=v0)
+    assert a.data is not b.data
+    assert not np.shares_memory(a.q0, b.q0) and not np.shares_memory(a.V0, b.V0)
+    np.testing.assert_array_equal(a.V0, b.V0)
+    np.testing.assert_array_equal(a.q0, q0)
+    r0 = simulate(a, (0, 0.2), method="dop853", rtol=1e-9, atol=1e-9, t_eval=[0.2])
+    used = [a.data, b.data]
+    del a, b
+    gc.collect()
+    c = PinocchioModel(m, q0=q0, v0=v0)
+    assert any(c.data is x for x in used)       # given back when a and b were collected
+    d = PinocchioModel(m, q0=q0, v0=v0)
+    assert d.data is not c.data
+    r1 = simulate(c, (0, 0.2), method="dop853", rtol=1e-9, atol=1e-9, t_eval=[0.2])
+    np.testing.assert_array_equal(r1.q, r0.q)
+    np.testing.assert_array_equal(r1.V, r0.V)
+    c.q0[:] = np.nan                            # a wrap's q0 is its own: the next one is checked as given
+    np.testing.assert_array_equal(PinocchioModel(m, q0=q0, v0=v0).q0, q0)
+    bad = q0.copy()
+    bad[0] = np.inf
+    with pytest.raises(InputError, match="q0"):
+        PinocchioModel(m, q0=bad, v0=v0)
