@@ -16,6 +16,8 @@ Jacobians.
 
 * :class:`ColouredJacobian` (model): ``jacobians(q, qd, t)`` -> (∂Q_e/∂q_e, ∂Q_e/∂q̇_e) as
   scipy CSR matrices, and ``agrees`` (the analysis' verdict);
+* :func:`newton_parts` (model, q, V, t, sparse): [M̄, C_t, K_t] of ``iteration_matrix``, by
+  :func:`sparse_parts` or from Exudyn's dense Jacobians;
 * :func:`sparse_parts` (model, q, V, t): (M̄, C_t, K_t) of ``iteration_matrix`` as
   scipy.sparse matrices from them, or None when the model keeps the dense path.
 """
@@ -170,3 +172,42 @@ def sparse_parts(model, q, V, t):
     if model._Mbar_sparse is None:
         model._Mbar_sparse = csr_matrix(model.Mbar)
     return [model._Mbar_sparse, -(H.T @ (Jv @ H)), -(H.T @ (Jq @ H))]
+
+
+def newton_parts(model, q, V, t, sparse):
+    """[M̄, C_t, K_t] of ``ExudynModel.iteration_matrix`` at (q, V, t) (``sparse``: scipy.sparse
+    matrices): the coloured differences (:func:`sparse_parts`) on large compiled models, else
+    Exudyn's dense ODE2 Jacobians mapped by H (a 0/1 selection when there are no rotations)."""
+    if sparse and model._compiled:                  # large models: no dense Jacobian transfer
+        parts = sparse_parts(model, q, V, t)
+        if parts is not None:
+            return parts
+    S, n2 = model.solver, model.n2
+    qi = model.nodes.selection()
+    if qi is not None:                              # no rotations: Hᵀ J H = J[qi][:, qi]
+        Mbar = model._forces_compiled(q, V, t)[1] if model._compiled else model._evaluate(q, V, t, False)[0]
+        parts = [Mbar]
+        for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
+            S.ComputeJacobianODE2RHS(model.mbs, fq, fv, 1.0, 2)
+            parts.append(-np.asarray(S.GetSystemJacobian())[qi[:, None], qi])
+        if sparse:
+            from scipy.sparse import csr_matrix
+            parts = [csr_matrix(X) for X in parts]
+        return parts
+    # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
+    # threads, woken once per matrix under load, cost ~30 ms a call
+    H = model.nodes.H_sparse(np.asarray(q, float))
+    Mbar = model._forces_compiled(q, V, t)[1] if model._compiled else model._evaluate(q, V, t, False)[0]
+    model.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
+    if sparse:
+        from scipy.sparse import csr_matrix as to
+    else:
+        def to(X):
+            return X
+    parts = [to(Mbar)]
+    for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
+        S.ComputeJacobianODE2RHS(model.mbs, fq, fv, 1.0, 2)
+        J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
+        JH = J @ H if sparse else (H.T @ J.T).T                     # J H
+        parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
+    return parts

@@ -64,6 +64,8 @@ def components(Mb):
     each ends with its component's first index."""
     i, j = np.nonzero(Mb)
     lab = np.arange(Mb.shape[0])
+    if (i == j).all():                          # diagonal (free bodies in principal axes)
+        return lab.astype(np.int64), np.ones(len(lab), np.int64)
     while True:
         new = lab.copy()
         np.minimum.at(new, i, lab[j])
@@ -105,15 +107,20 @@ def _block_inverses(Mb, members, sizes):
     out = {}
     for size, (cs, blks) in _blocks_by_size(Mb, members, sizes).items():
         d = np.sqrt(np.abs(np.diagonal(blks, axis1=1, axis2=2)).max(axis=1))
-        try:
-            L = np.linalg.cholesky(blks)
-        except np.linalg.LinAlgError:
-            return None
+        if size == 1:                           # 1 x 1: the same operations without LAPACK
+            if not (blks > 0.0).all():
+                return None
+            L = np.sqrt(blks)
+        else:
+            try:
+                L = np.linalg.cholesky(blks)
+            except np.linalg.LinAlgError:
+                return None
         # a factor with a pivot at rounding level is singular in all but name
         piv = np.diagonal(L, axis1=1, axis2=2).min(axis=1)
         if not (piv > 1e-7 * d).all():
             return None
-        Li = np.linalg.inv(L)
+        Li = 1.0 / L if size == 1 else np.linalg.inv(L)
         inv = np.swapaxes(Li, 1, 2) @ Li
         out[int(size)] = (cs, blks, 0.5 * (inv + np.swapaxes(inv, 1, 2)))
     return out

@@ -137,13 +137,17 @@ class NodeLayout:
         H[self.vq, self.vv] = 1.0
         return H
 
-    def selection(self):
+    def selection(self, rotvec=False):
         """Without rotation coordinates H is a 0/1 selection, H[qi[j], j] = 1: qi (nv), so
-        that Hᵀ J H = J[qi][:, qi]; None with rotation coordinates."""
-        if self.types or self.n2 != self.nv:
+        that Hᵀ J H = J[qi][:, qi]; None with rotation coordinates (``rotvec``: except
+        RotVecLG rotations, whose block of H is the identity too)."""
+        rot = [t for t in self.types if not (rotvec and t == "RigidBodyRotVecLG")]
+        if rot or self.n2 != self.nv:
             return None
         qi = np.empty(self.nv, int)
         qi[self.lin_v.ravel()] = self.pos_q.ravel()
+        for rq, wv in self.types.values():
+            qi[wv.ravel()] = rq.ravel()
         qi[self.vv] = self.vq
         return qi
 
@@ -308,11 +312,17 @@ def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
         from scipy.sparse import csr_matrix as sparse       # H has a few entries per row
     else:
         sparse = np.asarray                                 # small: dense products are cheaper
+    # H the same 0/1 permutation everywhere (RotVecLG and vector-space nodes only): Hᵀ M H
+    # is M permuted, and H⁺ᵀ M̄ H⁺ = M exactly (H⁺ = Hᵀ), so only the probes' M are compared
+    qi = nodes.selection(rotvec=True)
     Ms, Mbar = [], None
     for k in range(3):
         q = q0 if k == 0 else nodes.perturbed(q0, rng, 0.7)
         engine.sd.SetODE2Coordinates(q - engine.ref)
         M = engine.mass_matrix()
+        if qi is not None:
+            Ms.append(M[qi[:, None], qi])
+            continue
         H, Hp = sparse(nodes.H(q)), sparse(nodes.H_pinv(q))
         Mb = np.asarray((H.T @ (H.T @ M).T).T)                         # Hᵀ M H
         back = np.asarray((Hp.T @ (Hp.T @ Mb).T).T)                    # H⁺ᵀ M̄ H⁺

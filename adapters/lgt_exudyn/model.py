@@ -356,43 +356,8 @@ class ExudynModel(StepHooks, Model):
         key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
         cached = getattr(self, "_it_cache", None)
         if cached is None or cached[0] != key:
-            parts = None
-            if sparse and self._compiled:               # large models: no dense Jacobian transfer
-                from .iteration import sparse_parts
-                parts = sparse_parts(self, q, V, t)
-            if parts is not None:
-                cached = self._it_cache = (key, parts)
-                return combine_iteration(parts, c_acc, c_vel, c_pos)
-            S, n2 = self.solver, self.n2
-            qi = self.nodes.selection()
-            if qi is not None:                          # no rotations: Hᵀ J H = J[qi][:, qi]
-                Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
-                parts = [Mbar]
-                for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
-                    S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
-                    parts.append(-np.asarray(S.GetSystemJacobian())[qi[:, None], qi])
-                if sparse:
-                    from scipy.sparse import csr_matrix
-                    parts = [csr_matrix(X) for X in parts]
-                cached = self._it_cache = (key, parts)
-                return combine_iteration(parts, c_acc, c_vel, c_pos)
-            # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
-            # threads, woken once per matrix under load, cost ~30 ms a call
-            H = self.nodes.H_sparse(np.asarray(q, float))
-            Mbar = self._forces_compiled(q, V, t)[1] if self._compiled else self._evaluate(q, V, t, False)[0]
-            self.engine.write(np.asarray(q, float), H @ np.asarray(V, float), t)
-            if sparse:
-                from scipy.sparse import csr_matrix as to
-            else:
-                def to(X):
-                    return X
-            parts = [to(Mbar)]
-            for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
-                S.ComputeJacobianODE2RHS(self.mbs, fq, fv, 1.0, 2)
-                J = to(np.asarray(S.GetSystemJacobian())[:n2, :n2])
-                JH = J @ H if sparse else (H.T @ J.T).T                     # J H
-                parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
-            cached = self._it_cache = (key, parts)
+            from .iteration import newton_parts
+            cached = self._it_cache = (key, newton_parts(self, q, V, t, sparse))
         return combine_iteration(cached[1], c_acc, c_vel, c_pos)
 
     def constraint_owners(self, rows):
