@@ -94,10 +94,11 @@ def check_robot(name):
 
 
 @functools.lru_cache(maxsize=None)
-def load_robot(name):
+def load_robot(name, continuous=False):
     """(pin.Model, q0) of robot ``name`` as ``example_robot_data.load(name)`` gives them
     (q0: the loader's reference configuration), loaded once per process; the model is shared,
-    not to be modified."""
+    not to be modified. ``continuous``: also robots with continuous joints (q = (cos θ, sin θ);
+    the free-fall scenario's loops renormalize them); the PD controller needs nq = nv."""
     check_robot(name)
     import example_robot_data as erd
     try:
@@ -113,18 +114,19 @@ def load_robot(name):
                          f"use one of {', '.join(free_flyer_robots())}.")
     for j in range(2, m.njoints):
         jm = m.joints[j]
-        if jm.nq != jm.nv:
+        if jm.nq != jm.nv and not (continuous and jm.nq == 2 and jm.nv == 1):
             raise InputError(f"bench pinocchio_robot: robot {name!r} has joint {m.names[j]!r}, a {jm.shortname()} "
-                             f"(nq = {jm.nq}, nv = {jm.nv}: a URDF continuous joint); the robot scenes' user "
-                             "loops and PD controller need joints with nq = nv after the free-flyer (revolute, "
-                             "prismatic). PinocchioModel itself runs it: wrap the model and call simulate.")
+                             f"(nq = {jm.nq}, nv = {jm.nv}: a URDF continuous joint); the pd scenario's "
+                             "controller needs joints with nq = nv after the free-flyer (revolute, prismatic); "
+                             "the free scenario runs it. PinocchioModel itself runs it too: wrap the model and "
+                             "call simulate.")
     return m, np.array(robot.q0, float)
 
 
 def robot_state(name):
     """(pin.Model, q0, v0) of the robot scenes: the loader's q0, v0 = BASE_TWIST on the
     root and JOINT_SPEED·N(0, 1) (seed JOINT_SEED) on the joints."""
-    m, q0 = load_robot(name)
+    m, q0 = load_robot(name, continuous=True)
     rng = np.random.default_rng(JOINT_SEED)
     v0 = np.concatenate([BASE_TWIST, JOINT_SPEED * rng.normal(size=m.nv - 6)])
     return m, q0.copy(), v0
