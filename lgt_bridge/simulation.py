@@ -248,7 +248,8 @@ class Simulation:
         if self.n_steps >= self.max_steps:
             raise StepFailed(self._max_steps_message())
         h_before = self.h
-        h_try = min(self.h, target - self.t)
+        rem = target - self.t   # adaptive: the last two steps share it; a shortened step keeps the proposal
+        h_try = 0.5 * rem if st.adaptive and self.h < rem < 2.0 * self.h else min(self.h, rem)
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
@@ -265,7 +266,7 @@ class Simulation:
             self.t = target if hit else self.t + h_try
             self.model.write_back(st.q, st.V, self.t)
             if st.adaptive:
-                self.h = min(max(h_new, self.h) if hit and h_new < self.h else h_new, self.max_step)
+                self.h = min(h_new if h_try >= self.h else self.h * min(1.0, h_new / h_try), self.max_step)
             else:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:

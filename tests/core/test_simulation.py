@@ -116,3 +116,17 @@ def test_advance_to_many_returns_the_times_the_last_step_covers():
         assert np.abs(Q[k] - q).max() <= 1e-13 and np.abs(V[k] - v).max() <= 1e-12
     n2, Q2, _ = sim.advance_to_many(np.r_[sim.t, targets[n:]])      # the step's end itself
     assert n2 == 1 and np.array_equal(Q2[0], sim.q)
+
+
+def test_a_horizons_end_is_met_without_a_sliver_step_and_the_step_carries_on():
+    # an adaptive run splits the last stretch to a horizon's end between its last two steps
+    # (no sliver of a step that throws the controller off) and the next horizon starts
+    # from the controller's proposal, not from the shortened step
+    sim = Simulation(scenes.heavy_top(False), method="dop853", rtol=1e-8, atol=1e-8)
+    H, shortest, longest = 0.005, np.inf, 0.0
+    for k in range(1, 41):
+        r = sim.run(H * k)
+        h = np.diff(r.t)
+        if k > 1:
+            shortest, longest = min(shortest, h.min()), max(longest, h.max())
+    assert longest > 0 and shortest > 0.3 * longest
