@@ -16,7 +16,6 @@ by shortening the step), and ``min_step`` (a controller shrinking the step below
 saying why). :func:`~lgt_bridge.simulate` is one ``Simulation(...).run(...)``.
 """
 import time
-import warnings
 from functools import partial
 
 import numpy as np
@@ -24,9 +23,9 @@ import numpy as np
 from . import auto as _auto
 from . import diagnosis as _diagnosis
 from . import events as _events
-from .errors import ChartDomainError, InputError, ModelError, ModelNote
+from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
-from .integrators.constraints import Projector, project_initial
+from .integrators.constraints import Projector, note_initial_projection, project_initial
 from .integrators.problem import make_problem
 from .lgt import DEFAULT_GROUP
 from .progress import simulation_bar
@@ -45,16 +44,6 @@ def make_stepper(model, method, group=DEFAULT_GROUP, chart="exp", *, dt=None, rt
     stepper = spec.build(prob, dt=dt, rtol=rtol, atol=atol, projector=projector, rho_inf=rho_inf,
                          newton_tol=newton_tol, fixed_steps=fixed_steps)
     return stepper, stepper.step_size(dt, span)
-
-
-def _note_initial_projection(rep, t0):
-    warnings.warn(ModelNote(
-        f"the initial state at t = {t0:g} violates the constraints (positions by "
-        f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
-        f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
-        f"{rep['velocity']:.3g} (the model's own rule where it has one: Exudyn's first implicit step, "
-        "Pinocchio's loop closure). Make the "
-        "initial state consistent to silence this note."), stacklevel=5)
 
 
 class Simulation:
@@ -176,7 +165,7 @@ class Simulation:
             q0, V0, self.initial_projection = (own or partial(project_initial, model))(q0, V0, self.t)
             if self.initial_projection is not None:
                 model.write_back(q0, V0, self.t)
-                _note_initial_projection(self.initial_projection, self.t)
+                note_initial_projection(self.initial_projection, self.t)
         stepper.set_state(q0, V0)
         self.h = dt if dt is not None else stepper.initial_step(self.t)
         self.first_step = self.h

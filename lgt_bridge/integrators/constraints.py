@@ -12,8 +12,11 @@ minimum-norm solve of :func:`lgt_bridge.model.solve_schur` (redundant constraint
 steps come from the model's ``constraint_schur`` (dense by default, sparse where a model has
 sparse rows). The residuals before and after are kept for the result's statistics.
 """
+import warnings
+
 import numpy as np
 
+from ..errors import ModelNote
 from .problem import make_problem
 
 
@@ -85,6 +88,18 @@ class Projector:
         self.max_after = max(self.max_after, after)
         self.max_vel_after = max(self.max_vel_after, vel)
         return q, V
+
+
+def note_initial_projection(rep, t0):
+    """Warn (a ModelNote, pointing at the user's call) that the initial state was moved onto
+    the constraints, by how much: ``rep`` is :func:`project_initial`'s report."""
+    warnings.warn(ModelNote(
+        f"the initial state at t = {t0:g} violates the constraints (positions by "
+        f"{rep['position_residual']:.3g}, velocities by {rep['velocity_residual']:.3g}); it was moved "
+        f"onto them before the first step: q by up to {rep['position']:.3g}, V by up to "
+        f"{rep['velocity']:.3g} (the model's own rule where it has one: Exudyn's first implicit step, "
+        "Pinocchio's loop closure). Make the "
+        "initial state consistent to silence this note."), stacklevel=5)
 
 
 def project_initial(model, q0, V0, t0, tol=1e-10):
