@@ -110,6 +110,9 @@ class GenAlpha(Stepper):
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
         self._to_local = problem.local_index
+        # A the same at every q: read once (the fused Newton update takes it as it is)
+        self._A_const = bool(self.nc and m.constant_constraint_jacobian and not self._sparse_A)
+        self._A_fixed = None
         self._solve = None
         self._memo = {}               # factorize's memory of J's pattern
         self._lu_h = None
@@ -432,13 +435,17 @@ class GenAlpha(Stepper):
             Wd1, lam = z[:n], z[n:]
             cg = 1.0 / (h * h * self.beta)
             m = self.prob.model
+            A = self._A_fixed
+            if A is None and self._A_const:
+                A = self._A_fixed = np.asarray(self._A(self.q), dtype=float)
+        factors = getattr(self._solve, "factors", None) if fused else None
         for it in range(self.nmax):
-            factors = getattr(self._solve, "factors", None) if fused else None
             if factors is not None:
                 q1, V1, _, _ = self._evaluate(Wd1, h)
                 self.prob.n_f += 1
                 Q, g = m.forces_and_constraints(q1, V1, t1)
-                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float), Q, g, cg, *factors, z, r)
+                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float) if A is None else A,
+                                     Q, g, cg, *factors, z, r)
                 if d2 < 0.0:
                     self._why = "diverged (non-finite residual)"
                     return None
@@ -470,6 +477,7 @@ class GenAlpha(Stepper):
             if v is REFRESH:
                 self._jacobian(Wd1, lam, t1, h)
                 since = []
+                factors = getattr(self._solve, "factors", None) if fused else None
         last = ", ".join(f"{x:.2g}" for x in sizes[-3:])
         self._why = (f"did not converge in {self.nmax} iterations (last updates h·|ΔẆ| = {last} m/s or "
                      f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")

@@ -56,8 +56,11 @@ def contraction(sizes):
     two ratios, never the first ratio (the first update removes the predictor's error, which
     the matrix resolves well, and the error left contracts at the matrix's own rate, up to
     1000x slower on a kept matrix); None before three updates."""
-    ratios = [sizes[k] / sizes[k - 1] for k in range(max(2, len(sizes) - 2), len(sizes))]
-    return max(ratios) if ratios else None
+    k = len(sizes)
+    if k < 3:
+        return None
+    theta = sizes[-1] / sizes[-2]
+    return theta if k == 3 else max(theta, sizes[-2] / sizes[-3])
 
 
 def verdict(sizes, tol, floor, budget):
