@@ -324,8 +324,7 @@ class ExudynModel(StepHooks, Model):
 
     @property
     def constant_constraint_jacobian(self):
-        """True when A is read from Exudyn once, the same everywhere (``Model.
-        constant_constraint_jacobian``)."""
+        """A read from Exudyn once, the same everywhere (``Model.constant_constraint_jacobian``)."""
         return bool(self.n_constraints and self.ode1 is None and self._compiled
                     and self._pack().sp is not None and self._P.sp.constant)
 
