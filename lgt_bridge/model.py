@@ -196,6 +196,9 @@ class Model:
     #: generalized-α then keeps its residual in forces, M V̇ - Q + Aᵀλ, with one product by it
     constant_mass = None
 
+    #: True when A(q) is the same at every q (generalized-α then reads it once per step)
+    constant_constraint_jacobian = False
+
     def velocity_rhs(self, q, t):
         """b(q, t) in A(q) V = b (-∂g/∂t for position rows); None when it is zero."""
         return None

@@ -322,6 +322,12 @@ class ExudynModel(StepHooks, Model):
             self._Mbar_sparse = csr_matrix(self.Mbar)
         return self._Mbar_sparse
 
+    @property
+    def constant_constraint_jacobian(self):
+        """A read from Exudyn once, the same everywhere (``Model.constant_constraint_jacobian``)."""
+        return bool(self.n_constraints and self.ode1 is None and self._compiled
+                    and self._pack().sp is not None and self._P.sp.constant)
+
     @engine_call
     def forces_and_constraints(self, q, V, t):
         """(Q̄, g) at one state: one write for both (``Model.forces_and_constraints``)."""

@@ -19,7 +19,8 @@ its unknowns u̇, so the iteration matrix does not turn with the bodies):
                                    (it overrides ``solve_mass``);
     P (M V̇ - Q + Aᵀλ)             constrained otherwise (P: the rotation to body frames).
 
-Iteration matrix, reused across iterations and steps while Newton contracts:
+Iteration matrix, kept across iterations and steps while Newton contracts fast enough to
+converge within BUDGET updates (:mod:`.newton_control`):
 * models with ``mass_matrix`` and ``iteration_matrix(q, V, t, c_acc, c_vel, c_pos)``
   (M c_acc + C_t c_vel + K_t c_pos in V = (ω, ṙ) and the SO(3)xR³ increments (δθ body,
   δr inertial)): analytic and block-sparse, assembled per body from the model's M, C_t,
@@ -43,6 +44,7 @@ from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
 from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize, fd_matrix
+from .newton_control import AT_FLOOR, CONVERGED, REFRESH, tolerances, verdict
 
 
 # what a step's state needs besides Ẇ_{k+1}, in which it is affine:
@@ -69,7 +71,6 @@ def build(method, problem, o):
 
 class GenAlpha(Stepper):
 
-    THETA = 0.1
     #: at most this many halvings of one step after Newton failures
     MAX_CUTS = 30
     DIVERGED_HINT = ("Reduce dt, or lower rho_inf for more numerical damping of the highest "
@@ -109,6 +110,9 @@ class GenAlpha(Stepper):
         self._kin = Kinematics(problem) if self.analytic else None
         # to_local is a permutation of the entries (V's layout -> X's): X = d[_to_local]
         self._to_local = problem.local_index
+        # A the same at every q: read once (the fused Newton update takes it as it is)
+        self._A_const = bool(self.nc and m.constant_constraint_jacobian and not self._sparse_A)
+        self._A_fixed = None
         self._solve = None
         self._memo = {}               # factorize's memory of J's pattern
         self._lu_h = None
@@ -377,47 +381,52 @@ class GenAlpha(Stepper):
         self.cut_steps = max(0, self.cut_steps - 1)
         return True, (2.0 * h if grown else None)
 
-    #: the rounding floor of the Newton updates, in units of its estimate (below)
-    FLOOR = 100.0
-
-    def _newton_tolerances(self, h, n):
-        """(tol, floor) of the Newton updates' RMS size h·|ΔẆ|/√n (a velocity).
-
-        tol = newton_tol·(1 + |W|_RMS): relative to the size of the velocities, per
-        unknown (the Euclidean norm over a 40-body chain's 240 unknowns was 15x a 1-body
-        model's: the same accuracy failed on the larger model).
-        floor: the level the residual's rounding sets. The position rows g/(h²β) carry
-        rounding eps·|q|, which moves Ẇ by eps·|q|/(h²β) and h·Ẇ by eps·|q|/(hβ); the
-        force rows move it by eps·(1 + |W|). It grows as h falls, so halving the step cannot
-        get below it: an update that stops falling below FLOOR times this is converged."""
-        W = self.W
-        w_rms = math.sqrt(W.dot(W) / max(n, 1))
-        tol = self.tol * (1.0 + w_rms)
-        eps = np.finfo(float).eps
-        qmax = float(np.abs(self.q).max(initial=0.0))
-        floor = self.FLOOR * eps * ((1.0 + w_rms) + (qmax / (h * self.beta) if self.nc else 0.0))
-        return tol, max(tol, floor)
-
     def _attempt(self, t, h):
-        """Modified Newton: the stored iteration matrix is refreshed at the current
-        iterate whenever the contraction factor ‖Δz_k‖/‖Δz_{k-1}‖ exceeds THETA
-        (the body-frame unknowns of SE(3) make it rotate with fast-spinning bodies)."""
+        """Modified Newton (:mod:`.newton_control`): the iteration matrix is kept across
+        steps while the updates contract fast enough to converge within BUDGET updates, and
+        refreshed at the current iterate otherwise (the body-frame unknowns of SE(3) make it
+        rotate with fast-spinning bodies); a step whose kept matrix fails is retried once
+        from the predictor on a fresh matrix before it counts as failed."""
         if self.Wd is None:
             self.start(t)
         self._consts = None
         t1 = t + h
-        n = len(self.W)
         # predictor: linear extrapolation of the accelerations of the last two steps
         if self._prev is not None and _same(self._prev[0], h):
             Wd1 = 2.0 * self.Wd - self._prev[1]
             lam = 2.0 * self.lam - self._prev[2]
         else:
             Wd1, lam = self.Wd.copy(), self.lam.copy()
-        if self._solve is None or not _same(self._lu_h, h):
+        kept = self._solve is not None and _same(self._lu_h, h)
+        if not kept:
             self._jacobian(Wd1, lam, t1, h)
-        prev, converged, finite = None, False, True
-        tol, floor = self._newton_tolerances(h, n)
-        sizes = []
+        tol, floor = tolerances(self.W, self.q, self.tol, h, self.beta, self.nc > 0)
+        n_jac = self.n_jacobians
+        out = self._newton(Wd1, lam, t1, h, tol, floor)
+        if out is None and kept and self.n_jacobians == n_jac:
+            self._jacobian(Wd1, lam, t1, h)
+            out = self._newton(Wd1, lam, t1, h, tol, floor)
+        if out is None:
+            self._solve = None
+            why = self._why
+            raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
+                             diverged=False)
+        Wd1, lam = out
+        q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))
+        a1 = self._consts.a0 + self._consts.k * Wd1
+        self._prev = (h, self.Wd, self.lam)
+        self.Wd, self.a, self.lam = Wd1, a1, lam
+        self.finish(t1, q1, V1, W1, quats)
+
+    #: a kept iteration matrix is refreshed when the step would need more updates than this
+    BUDGET = 10
+
+    def _newton(self, Wd1, lam, t1, h, tol, floor):
+        """Newton's updates from (Ẇ, λ) on the stored matrix, refreshed as
+        :func:`.newton_control.verdict` says: the converged (Ẇ_{k+1}, λ), or None (the
+        reason in ``_why``)."""
+        n = len(Wd1)
+        sizes, since = [], []         # the step's update sizes; those since the last refresh
         fused = self._Mcsr is not None and self._vel_rows is None and not self._sparse_A
         if fused:                    # one kernel per iteration: residual, solve and update
             from ..kernels.stage import ga_force_newton
@@ -426,23 +435,27 @@ class GenAlpha(Stepper):
             Wd1, lam = z[:n], z[n:]
             cg = 1.0 / (h * h * self.beta)
             m = self.prob.model
+            A = self._A_fixed
+            if A is None and self._A_const:
+                A = self._A_fixed = np.asarray(self._A(self.q), dtype=float)
+        factors = getattr(self._solve, "factors", None) if fused else None
         for it in range(self.nmax):
-            factors = getattr(self._solve, "factors", None) if fused else None
             if factors is not None:
                 q1, V1, _, _ = self._evaluate(Wd1, h)
                 self.prob.n_f += 1
                 Q, g = m.forces_and_constraints(q1, V1, t1)
-                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float), Q, g, cg, *factors, z, r)
+                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float) if A is None else A,
+                                     Q, g, cg, *factors, z, r)
                 if d2 < 0.0:
-                    finite = False
-                    break
+                    self._why = "diverged (non-finite residual)"
+                    return None
                 self.n_newton += 1
                 size = h * math.sqrt(d2 / n)
             else:
                 r = self._residual(Wd1, lam, t1, h)
                 if not self._finite:
-                    finite = False
-                    break
+                    self._why = "diverged (non-finite residual)"
+                    return None
                 dz = self._solve(r)
                 dW = dz[:n] if self.nc else dz
                 if fused:
@@ -456,36 +469,19 @@ class GenAlpha(Stepper):
                 # of size eps/(h²β) from the scaled constraint rows
                 size = h * math.sqrt(dW.dot(dW) / n)
             sizes.append(size)
-            if size <= tol:
-                converged = True
-                break
-            # at the rounding floor of the residual the updates stop falling: that is converged
-            if size <= floor and len(sizes) > 1 and size >= 0.5 * sizes[-2]:
-                converged = True
-                self.n_floor += 1
-                break
-            if prev is not None and size > self.THETA * prev:
+            since.append(size)
+            v = verdict(since, tol, floor, self.BUDGET)
+            if v is CONVERGED or v is AT_FLOOR:
+                self.n_floor += v is AT_FLOOR
+                return (Wd1.copy(), lam.copy()) if fused else (Wd1, lam)
+            if v is REFRESH:
                 self._jacobian(Wd1, lam, t1, h)
-                prev = None
-            else:
-                prev = size
-        if not converged:
-            self._solve = None
-            if not finite:
-                why = "diverged (non-finite residual)"
-            else:
-                last = ", ".join(f"{x:.2g}" for x in sizes[-3:])
-                why = (f"did not converge in {self.nmax} iterations (last updates h·|ΔẆ| = {last} m/s or "
-                       f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
-            raise StepFailed(f"genalpha: Newton {why} at t = {t1:.9g} (h = {h:.3g}); reduce dt.",
-                             diverged=False)
-        if fused:
-            Wd1, lam = Wd1.copy(), lam.copy()
-        q1, V1, quats, W1 = (x.copy() for x in self._evaluate(Wd1, h))
-        a1 = self._consts.a0 + self._consts.k * Wd1
-        self._prev = (h, self.Wd, self.lam)
-        self.Wd, self.a, self.lam = Wd1, a1, lam
-        self.finish(t1, q1, V1, W1, quats)
+                since = []
+                factors = getattr(self._solve, "factors", None) if fused else None
+        last = ", ".join(f"{x:.2g}" for x in sizes[-3:])
+        self._why = (f"did not converge in {self.nmax} iterations (last updates h·|ΔẆ| = {last} m/s or "
+                     f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
+        return None
 
 
 def _same(h0, h):

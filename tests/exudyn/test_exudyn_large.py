@@ -148,7 +148,8 @@ def test_genalpha_on_the_sparse_paths_matches_the_dense_paths(monkeypatch):
 
 def test_coordinate_constraints_are_constant_rows(rng):
     """A pinned ANCF cable (two CoordinateConstraints): A is read from Exudyn once (the same
-    at every analysis state, γ = 0); f and A equal the numpy backend's at moved states."""
+    at every analysis state, γ = 0; constant_constraint_jacobian says so on the compiled
+    backend); f and A equal the numpy backend's at moved states."""
     from lgt_exudyn import kernels as K
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -157,6 +158,11 @@ def test_coordinate_constraints_are_constant_rows(rng):
         ref = ExudynModel(mbs, backend="numpy")
     P = K.pack(m)
     assert P.sp is not None and P.sp.constant and P.sp.joints is None
+    # says so to generalized-α, which then reads A once; a chain's revolute joints do not
+    assert m.constant_constraint_jacobian and not ref.constant_constraint_jacobian
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert not ExudynModel(scenes.chain(3, joint="revolute")[1]).constant_constraint_jacobian
     for _ in range(2):
         q = m.q0 + 0.05 * rng.normal(size=m.n2)
         V = rng.normal(size=m.nv)
