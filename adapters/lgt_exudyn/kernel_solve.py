@@ -41,13 +41,10 @@ _T = "int64[:, ::1]"
 
 
 @njit(cache=True, error_model="numpy")
-def _schur_blocks(T, off, w, A, Qbar):
-    """With the constant M̄'s diagonal blocks: M̄⁻¹Q̄ into w[OMIQ:], Y = M̄⁻¹Aᵀ (transposed)
-    into w[OY:] and the lower triangle of S = A M̄⁻¹ Aᵀ into w[OS:] (rows of A multiplied only
-    on the blocks they touch)."""
-    nv, nc = off[NV_], A.shape[0]
-    wm, wy, ws = off[OMIQ], off[OY], off[OS]
-    mem, touch = off[RMEMBER], off[RSCRATCH]
+def block_miq(T, off, w, Qbar):
+    """M̄⁻¹Q̄ block by block (the constant M̄'s packed diagonal blocks' inverses) into
+    w[OMIQ:]; returns OMIQ's offset. Used by this module's and :mod:`.kernel_sparse`'s solves."""
+    mem, wm = off[RMEMBER], off[OMIQ]
     for c in range(off[RCOMP], off[RMEMBER]):
         a, n = T[c, START], T[c, SIZE]
         base = off[OMBI] + T[c, FOFF]
@@ -56,6 +53,21 @@ def _schur_blocks(T, off, w, A, Qbar):
             for j in range(n):
                 s += w[base + n * i + j] * Qbar[T[mem + a + j, MEMBER]]
             w[wm + T[mem + a + i, MEMBER]] = s
+    return wm
+
+
+@njit(cache=True, error_model="numpy")
+def _schur_blocks(T, off, w, A, Qbar):
+    """With the constant M̄'s diagonal blocks: M̄⁻¹Q̄ into w[OMIQ:] (:func:`block_miq`),
+    Y = M̄⁻¹Aᵀ (transposed) into w[OY:] and the lower triangle of S = A M̄⁻¹ Aᵀ into w[OS:]
+    (rows of A multiplied only on the blocks they touch)."""
+    nv, nc = off[NV_], A.shape[0]
+    wy, ws = off[OY], off[OS]
+    mem, touch = off[RMEMBER], off[RSCRATCH]
+    block_miq(T, off, w, Qbar)
+    for c in range(off[RCOMP], off[RMEMBER]):
+        a, n = T[c, START], T[c, SIZE]
+        base = off[OMBI] + T[c, FOFF]
         # rows of A touching this block: Y[k, block] = M̄_c⁻¹ A[k, block], S += A Y on them
         nt = 0
         for k in range(nc):

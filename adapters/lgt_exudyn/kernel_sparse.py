@@ -28,12 +28,13 @@ from lgt_bridge.kernels.linalg import envelope_cholesky, envelope_solve
 from lgt_bridge.kernels.rotations import to_quat
 
 from . import kernel_tables
-from .kernel_solve import PIVOT_TOL
-from .kernel_tables import CODE, FOFF, MEMBER, NROT, NV_, OMBI, OMIQ, POS, RCOMP, RMEMBER, ROT, SIZE, START, TWIST
+from . import kernel_solve
+from .kernel_solve import PIVOT_TOL, block_miq
+from .kernel_tables import CODE, NROT, NV_, POS, ROT, TWIST
 from .sparse import (ACOL, APTR, BOFF, BPTR, BSLOT, ESTART, FIRST, LAM, MDIAG, MINV, MOFF, MSIZE, PA, PB, PERM, PN, PPTR,
                      RHS, SENV, SIDX, SPTR, YVAL)
 
-guard_cache(__file__, extra=(linalg.__file__, kernel_tables.__file__))
+guard_cache(__file__, extra=(linalg.__file__, kernel_tables.__file__, kernel_solve.__file__))
 
 _V = "float64[::1]"
 _M = "float64[:, ::1]"
@@ -206,21 +207,6 @@ def _back(I, io, F, fo, out):
             out[acol[e]] -= yval[e] * lk
 
 
-@njit(cache=True, error_model="numpy")
-def _miq(T, off, w, Qbar):
-    """M̄⁻¹Q̄ block by block into w[OMIQ:]; returns OMIQ's offset."""
-    mem, wm = off[RMEMBER], off[OMIQ]
-    for c in range(off[RCOMP], off[RMEMBER]):
-        a, n = T[c, START], T[c, SIZE]
-        base = off[OMBI] + T[c, FOFF]
-        for i in range(n):
-            s = 0.0
-            for j in range(n):
-                s += w[base + n * i + j] * Qbar[T[mem + a + j, MEMBER]]
-            w[wm + T[mem + a + i, MEMBER]] = s
-    return wm
-
-
 @njit(f"int64({_T}, {_I}, {_V}, {_I}, {_I}, {_V}, {_I}, {_V}, {_V}, {_V}, {_V})", cache=True,
       error_model="numpy")
 def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
@@ -235,9 +221,9 @@ def sparse_solve(T, off, w, I, io, F, fo, aval, Qbar, gam, Vd):
     if Qbar.shape[0] != nv or Vd.shape[0] != nv or gam.shape[0] != nc:
         raise ValueError("sparse_solve: Qbar, Vd need nv entries, gam nc")
     if not _factor(I, io, F, fo, aval):
-        _miq(T, off, w, Qbar)
+        block_miq(T, off, w, Qbar)
         return 1
-    wm = _miq(T, off, w, Qbar)
+    wm = block_miq(T, off, w, Qbar)
     for p in range(nc):
         i = perm[p]
         s = 0.0
