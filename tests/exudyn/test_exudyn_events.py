@@ -148,23 +148,8 @@ def test_cli_run_events_option(tmp_path):
 
 
 def test_exudyn_revolute_pendulum_period():
-    from exudyn.utilities import InertiaCuboid, ObjectGround
-
-    theta0, rho, sides = 2.2, 500.0, [0.1, 0.1, 1.2]
-    d = sides[2] / 2
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    ground = mbs.AddObject(ObjectGround())
-    inertia = InertiaCuboid(density=rho, sideLengths=sides)
-    R0 = Ry(theta0)
-    body = mbs.CreateRigidBody(inertia=inertia, referencePosition=R0 @ [0, 0, -d], referenceRotationMatrix=R0,
-                               gravity=[0, 0, -G])
-    mbs.CreateRevoluteJoint(itemNumbers=[ground, body], position=[0, 0, 0], axis=[0, 1, 0])
-    mbs.Assemble()
+    SC, mbs, _, T = revolute_pendulum(2.2)
     m = lgt_bridge.wrap(mbs)
-    mass = rho * np.prod(sides)
-    I_pivot = mass * (sides[0] ** 2 + sides[2] ** 2) / 12 + mass * d * d
-    T = period(theta0, I_pivot / (mass * d))
     r = simulate(m, (0.0, 1.3 * T), method="dop853", rtol=1e-12, atol=1e-12,
                  events=[lambda t, q, V: q[0]])          # x of the body's centre (Exudyn's own q)
     te = r.t_events[0]

@@ -58,17 +58,6 @@ def built(request):
     return SC, m, K.pack(m)
 
 
-def states(m, rng, n=3):
-    """Random states near q0 (Rxyz nodes kept away from gimbal lock)."""
-    out = []
-    while len(out) < n:
-        q = m._moved(m.q0, rng.normal(size=m.nv) * 0.5, 1.0)
-        if any(typ == "RigidBodyRxyz" and abs(np.cos(q[idx[4]])) < 0.3 for typ, idx, _ in m.kinds):
-            continue
-        out.append((q, rng.normal(size=m.nv) * 3.0, float(rng.uniform(0, 1))))
-    return out
-
-
 def residual_at(m, q, V, t):
     """Exudyn's full residual vector (ODE2 forces first) at (q, V, t)."""
     m._write(q, m.rates_from_twist(q, V), t)
@@ -79,7 +68,7 @@ def residual_at(m, q, V, t):
 def test_state_writes_and_moved_state(built, rng):
     SC, m, P = built
     qpos, qvel = np.zeros(m.n2), np.zeros(m.n2)
-    for q, V, t in states(m, rng):
+    for q, V, t in em.random_states(m, rng):
         K.write(P.T, P.off, P.w, q, V, 0.0, qpos, qvel)
         assert close(qpos, q - m.ref) and close(qvel, m.rates_from_twist(q, V))
         assert close(qvel, m.H(q) @ V)
@@ -95,7 +84,7 @@ def test_state_writes_and_moved_state(built, rng):
 def test_forces_constraint_matrix_and_solve(built, rng):
     SC, m, P = built
     nv = m.nv
-    for q, V, t in states(m, rng):
+    for q, V, t in em.random_states(m, rng):
         Mb, Qb, A, gam = m._evaluate(q, V, t)
         H = m.H(q)
         R = residual_at(m, q, V, t)
@@ -147,7 +136,7 @@ def test_gamma_difference(rng):
 def test_f_compiled_equals_f_and_leaves_the_evaluated_state(built, rng):
     SC, m, P = built
     tol = 1e-13 if not m.n_constraints else 1e-9     # γ: finite differences over 2e-5
-    for q, V, t in states(m, rng):
+    for q, V, t in em.random_states(m, rng):
         ref = m.f(q, V, t)
         n = m.n_eval
         mine = K.f_compiled(m, P, q, V, t)
@@ -166,7 +155,7 @@ def test_compiled_forces_and_iteration_matrix_equal_the_numpy_backend(built, rng
     SC, m, P = built
     ref = ExudynModel(m.mbs, backend="numpy")
     assert m._compiled and not ref._compiled
-    for q, V, t in states(m, rng, n=2):
+    for q, V, t in em.random_states(m, rng, n=2):
         assert close(m.forces(q, V, t), ref.forces(q, V, t), 1e-13)
         if m.iteration_matrix is None:                 # Rxyz nodes: finite differences instead
             assert ref.iteration_matrix is None
@@ -194,7 +183,7 @@ def test_f_compiled_on_special_models(case, rng):
         mbs = getattr(sm, name)(**kw)[0]
         m = ExudynModel(mbs)
     P = K.pack(m)
-    for q, V, t in states(m, rng, 2):
+    for q, V, t in em.random_states(m, rng, 2):
         V = V * 0.2
         assert close(K.f_compiled(m, P, q, V, t), m.f(q, V, t), 1e-9)
 
@@ -204,7 +193,7 @@ def test_redundant_rows_fall_back_to_the_minimum_norm_solve(dense, rng):
     SC, mbs = offset_com_pendulum() if dense else em.heavy_top(em.EP)[:2]
     m = ExudynModel(mbs)
     P = K.pack(m, nc_max=5)
-    q, V, t = states(m, rng, 1)[0]
+    q, V, t = em.random_states(m, rng, 1)[0]
     Mb, Qb, A, gam = m._evaluate(q, V, t)
     A2 = np.ascontiguousarray(np.vstack([A, A[:2]]))     # rows 3, 4 repeat rows 0, 1
     g2 = np.concatenate([gam, gam[:2]])
@@ -270,7 +259,7 @@ def test_plain_f_of_unconstrained_models(name, rng):
     m.f(m.q0, m.V0, 0.0)                                     # builds the pack (and the closure)
     P = m._P
     assert "f" in m.__dict__ and (not m.n_constraints or P.sp.joints is not None)
-    for q, V, t in states(m, rng):
+    for q, V, t in em.random_states(m, rng):
         n = m.n_eval
         mine = m.f(list(q), V[::1], t)                       # any array-like is accepted
         assert m.n_eval == n + 1

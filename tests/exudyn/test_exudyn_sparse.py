@@ -65,17 +65,6 @@ def build(table, name):
     return out, m, K.pack(m)
 
 
-def states(m, rng, n=3):
-    """Random states near q0 (Rxyz nodes kept away from gimbal lock)."""
-    out = []
-    while len(out) < n:
-        q = m._moved(m.q0, rng.normal(size=m.nv) * 0.5, 1.0)
-        if any(typ == "RigidBodyRxyz" and abs(np.cos(q[idx[4]])) < 0.3 for typ, idx, _ in m.kinds):
-            continue
-        out.append((q, rng.normal(size=m.nv) * 3.0, float(rng.uniform(0, 1))))
-    return out
-
-
 def exudyn_A(m, q):
     """Exudyn's AE Jacobian of the kept rows mapped to twists: C_q H (the numpy reference)."""
     m.sd.SetODE2Coordinates(q - m.ref)
@@ -94,7 +83,7 @@ def closed_form(m, P, q, V):
 def test_closed_form_rows_equal_exudyns_jacobian_and_gamma_its_differences(name, rng):
     _, m, P = build(CLOSED, name)
     assert P.sp is not None and P.sp.joints is not None
-    for q, V, t in states(m, rng):
+    for q, V, t in em.random_states(m, rng):
         A, gam = closed_form(m, P, q, V)
         assert close(A, exudyn_A(m, q), 1e-13)
         # γ = d/ds (A(τ(q, sV)) V) at s = 0: central differences, Richardson-extrapolated
@@ -111,7 +100,7 @@ def test_sparse_solve_equals_the_dense_kkt_solve(name, rng):
     _, m, P = build(TABLES, name)
     sp = P.sp
     assert sp is not None and (sp.joints is None) == (name in GATHERED)
-    for q, V, t in states(m, rng, 2):
+    for q, V, t in em.random_states(m, rng, 2):
         A = exudyn_A(m, q)
         sp.aval[:] = A.ravel()[sp.flat]
         assert close(sp.dense(*A.shape), A)                # the pattern holds A
@@ -128,7 +117,7 @@ def test_sparse_solve_equals_the_dense_kkt_solve(name, rng):
 def test_f_equals_the_numpy_backend(name, rng):
     out, m, P = build(TABLES, name)
     ref = ExudynModel(m.mbs, backend="numpy")
-    for q, V, t in states(m, rng, 2):
+    for q, V, t in em.random_states(m, rng, 2):
         V = 0.3 * V
         # the numpy backend's γ is a difference quotient over 2e-5: equal to 1e-9
         assert close(m.f(q, V, t), ref.f(q, V, t), 1e-9)
@@ -193,7 +182,7 @@ def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, dense_a, rn
     monkeypatch.setattr(K, "DENSE_SCHUR_A", 10 ** 9 if dense_a else 0)
     _, m, P = build(TABLES, name)
     ref = ExudynModel(m.mbs, backend="numpy")
-    for q, V, t in states(m, rng, 2):
+    for q, V, t in em.random_states(m, rng, 2):
         A, correct = m.constraint_schur(q)
         Ad, correct_d = Model.constraint_schur(ref, q)
         assert hasattr(A, "toarray") != dense_a
@@ -208,7 +197,7 @@ def test_constraint_schur_and_multipliers_equal_the_dense_ones(name, dense_a, rn
 def test_sparse_iteration_matrix_equals_the_dense_one(rng):
     """generalized-α's Newton parts asked sparse (large models) equal the dense ones."""
     _, m, P = build(SPHERICAL, "tree EP")
-    for q, V, t in states(m, rng, 2):
+    for q, V, t in em.random_states(m, rng, 2):
         for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (2.0, 0.5, 3.0)):
             dense = m.iteration_matrix(q, V, t, *c)
             assert close(m.iteration_matrix(q, V, t, *c, sparse=True).toarray(), dense, 1e-13)

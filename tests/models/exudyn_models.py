@@ -182,3 +182,14 @@ def welded_pair(node=EP):
     mbs.AddObject(GenericJoint(markerNumbers=[m1, m2], constrainedAxes=[1, 1, 1, 1, 1, 1], alternativeConstraints=True))
     mbs.Assemble()
     return SC, mbs
+
+
+def random_states(m, rng, n=3):
+    """Random states near q0 (Rxyz nodes kept away from gimbal lock)."""
+    out = []
+    while len(out) < n:
+        q = m._moved(m.q0, rng.normal(size=m.nv) * 0.5, 1.0)
+        if any(typ == "RigidBodyRxyz" and abs(np.cos(q[idx[4]])) < 0.3 for typ, idx, _ in m.kinds):
+            continue
+        out.append((q, rng.normal(size=m.nv) * 3.0, float(rng.uniform(0, 1))))
+    return out
