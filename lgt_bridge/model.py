@@ -67,6 +67,21 @@ class RigidBody:
 CIRCLE_NORM_TOL = 1e-6
 
 
+@dataclass(frozen=True)
+class EngineVelocity:
+    """f in an engine's own velocities, for a model whose f converts them (a
+    ``Model.engine_velocity``). On each body of ``bodies`` (indices into ``layout.bodies``,
+    bodies with a position) the engine's velocity v holds the body-frame twist (v_lin = Rᵀṙ,
+    ω) over the body's six twist entries, where V holds (ω, ṙ); every other entry of v is
+    V's. ``f(q, v, t)`` returns the engine's acceleration in v's layout: (v̇_lin, ω̇) on those
+    bodies, so that r̈ = R (v̇_lin + ω × v_lin), and V̇'s entries elsewhere (Pinocchio's
+    ``aba`` of a free-flyer). It must equal the conversion of f(q, V, t); the compiled
+    stages read and write v in one kernel call (:mod:`lgt_bridge.kernels.stage`)."""
+
+    bodies: tuple
+    f: object
+
+
 @dataclass
 class Layout:
     """Rigid bodies, vector-space coordinates and unit complex numbers (SO(2)) of a
@@ -198,6 +213,10 @@ class Model:
 
     #: True when A(q) is the same at every q (generalized-α then reads it once per step)
     constant_constraint_jacobian = False
+
+    #: f in the engine's own velocities, when it is cheaper than f (an :class:`EngineVelocity`;
+    #: the compiled explicit stages then call it instead of f), else None
+    engine_velocity = None
 
     def velocity_rhs(self, q, t):
         """b(q, t) in A(q) V = b (-∂g/∂t for position rows); None when it is zero."""

@@ -114,6 +114,8 @@ class Joints:
         self.model = model
         bodies, vq, vv, cq, cv = [], [], [], [], []
         self.roots, self.balls, self.planars, self.zyx = [], [], [], []
+        #: the free-flyers' indices in layout.bodies (same order as roots)
+        self.root_bodies = ()
         for j, jm in enumerate(model.joints):      # (iterating: model.joints[j] copies the joint each time)
             if j == 0:
                 continue
@@ -141,6 +143,7 @@ class Joints:
                 bodies.append(RigidBody(params.RZYX, (), tuple(range(iq, iq + 3)), tuple(range(iv, iv + 3)), jname))
                 self.zyx.append((iq, iv))
             elif name == "JointModelFreeFlyer":
+                self.root_bodies += (len(bodies),)
                 bodies.append(RigidBody(params.QUAT_XYZW, tuple(range(iq, iq + 3)), tuple(range(iq + 3, iq + 7)),
                                         tuple(range(iv, iv + 6)), jname))
                 self.roots.append((iq, iv))

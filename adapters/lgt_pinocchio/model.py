@@ -26,7 +26,7 @@ import numpy as np
 
 from lgt_bridge import backend as _backend
 from lgt_bridge.errors import InputError, ModelNote
-from lgt_bridge.model import Model, combine_iteration
+from lgt_bridge.model import EngineVelocity, Model, combine_iteration
 
 from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, jacobian_fd
 from .iteration import iteration_parts
@@ -176,8 +176,11 @@ class PinocchioModel(Model):
             self._kernels = kernels
             self._jt = kernels.joint_table(self.joints.roots, self.joints.planars, self.joints.zyx)
             self._kW, self._kv = kernels.work_array(self._jt, self.nv)
-            self.f = self._f_compiled = build_f(self, kernels)
+            self.f, f_engine = build_f(self, kernels)
+            self._f_compiled = self.f
             self.f.__doc__ = PinocchioModel.f.__doc__
+            if f_engine is not None:
+                self.engine_velocity = EngineVelocity(self.joints.root_bodies, f_engine)
         self.loads.check(self.q0, v0)          # a wrong tau or fext fails before any step
 
     def _rank_constraints(self):

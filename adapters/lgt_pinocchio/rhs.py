@@ -4,7 +4,9 @@
 * :func:`f_numpy`: the readable reference, on :class:`lgt_pinocchio.joints.Joints`;
 * :func:`build_f`: the compiled backend's f, a closure over the model's constants (no attribute
   look-ups per call) around two kernel calls (:mod:`lgt_pinocchio.kernels`) over the model's
-  preallocated work array.
+  preallocated work array, and, on a model whose only converted joints are free-flyers, the
+  same f in Pinocchio's own velocities (the model's ``engine_velocity``: the compiled stages
+  convert in their kernel and call Pinocchio directly).
 """
 from collections import namedtuple
 
@@ -42,9 +44,11 @@ def f_numpy(m, q, V, t):
 
 
 def build_f(m, kernels):
-    """The compiled-backend f of model ``m``: V -> v by one kernel call into the work array,
-    Pinocchio, then a -> V̇ in place by a second (ABA's a is a new array, so it is returned as
-    V̇)."""
+    """(f, f_engine) of model ``m`` on the compiled backend. f: V -> v by one kernel call into
+    the work array, Pinocchio, then a -> V̇ in place by a second (ABA's a is a new array, so
+    it is returned as V̇). f_engine(q, v, t): Pinocchio's a at its own (q, v), None unless
+    the model has free-flyers and no planar or spherical-ZYX joint (whose conversions the
+    stage kernels do not make)."""
     v_from_twist, vdot_from_a = kernels.v_from_twist, kernels.vdot_from_a_unchecked
     pin, model, data = m.pin, m.model, m.data
     # the closure holds no reference to m (it becomes m.f: a cycle would keep m and its
@@ -78,6 +82,14 @@ def build_f(m, kernels):
         engine = None
         aba = pin.aba
 
+    def f_engine(q, v, t):
+        tau = tau_c
+        if tau_call:
+            tau = tau(t, q, v)
+            if type(tau) is not ndarray or tau.dtype is not F64 or tau.shape != nv_shape:
+                tau = checked_tau(tau)
+        return aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
+
     def f(q, V, t):
         if has_roots:
             try:
@@ -105,4 +117,5 @@ def build_f(m, kernels):
             vdot_from_a(jt, W, a)                  # in place (jt, W and a: int64 / float64 arrays)
         return a
 
-    return f
+    free_flyers_only = m.joints.roots and not (m.joints.planars or m.joints.zyx)
+    return f, (f_engine if free_flyers_only else None)

@@ -34,6 +34,13 @@ class CompiledProblem(LocalProblem):
         # part of every call
         self._X, self._W, self._q, self._V, self._W0, self._qk, self._xd = [w[i:j] for i, j in self._slices]
         self._pk, self._p = [w[i:j].reshape(-1, 4) for i, j in self._quat_slices]
+        # the stages' f and its velocity argument: f(q, V) or the engine's f(q, v) (v written
+        # by the stage kernel, V̇ read in the engine's form: model.engine_velocity)
+        self._fs, self._vs = model.f, self._V
+        eng = getattr(model, "engine_velocity", None)
+        if eng is not None and len(eng.bodies):
+            self._I = self._engine_tables(tuple(int(b) for b in eng.bodies))
+            self._fs, self._vs = eng.f, w[self._ve_slice[0]:self._ve_slice[1]]
         self._Xd = np.zeros(self.nX)
         self._W0_src = None            # the array last copied into the W0 slot
         self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
@@ -58,11 +65,31 @@ class CompiledProblem(LocalProblem):
                                                           (_k.OW0, nv), (_k.OQK, nq), (_k.OXD, nX))]
         a["_quat_slices"] = [(off[k], off[k] + 4 * nb) for k in (_k.OPK, _k.OP)]
         a["_I"] = _k.pack_tables(a["bt"], a["vt"], a["off"])
+        a["_ve_slice"] = (off[_k.OVE], off[_k.OVE] + nv)
+        a["_engine_I"] = {}                       # packed tables by the model's engine bodies
         a["_n_end"] = off[_k.OW0]                 # X, W, q, V: the work array's first entries
         a["_one"] = np.ones(1)
         a["_zK"] = np.zeros((2, max(nX, nv)))
         a["_zv"], a["_zx"] = np.zeros(nv), np.zeros(nX)     # (rates: no affine part)
         return a
+
+    def _engine_tables(self, bodies):
+        """The packed tables with the bodies ``bodies`` (layout indices) in the engine's
+        velocity form (kept in the analysis, by bodies)."""
+        got = self._engine_I.get(bodies)
+        if got is None:
+            row = {}
+            for s in self.sets:
+                for b in s.ids:
+                    row[int(b)] = len(row)
+            bad = [b for b in bodies if b not in row or self.layout.bodies[b].rotation_only]
+            if bad:
+                from ..errors import InputError
+                raise InputError(f"engine_velocity: bodies {bad} are not rigid bodies with a position "
+                                 f"in the model's layout ({self.layout.nbodies} bodies)")
+            bt, off = _k.with_engine(self.bt, self.off, [row[b] for b in bodies])
+            got = self._engine_I[bodies] = _k.pack_tables(bt, self.vt, off)
+        return got
 
     # --- per step ---------------------------------------------------------------
     def start(self, q_k, quats=None):
@@ -193,7 +220,7 @@ class CompiledProblem(LocalProblem):
         self._vd = _NONE                          # consumed (a failing f leaves nothing pending)
         if c > climit:
             return c
-        Vd = self.model.f(self._q, self._V, ts)
+        Vd = self._fs(self._q, self._vs, ts)
         self.n_f += 1
         if type(Vd) is not np.ndarray or Vd.dtype is not _F64 or Vd.ndim != 1:
             Vd = np.ascontiguousarray(Vd, dtype=float).reshape(-1)
@@ -241,7 +268,7 @@ class CompiledProblem(LocalProblem):
         if W0 is not self._W0_src:
             self._W0[:] = W0
             self._W0_src = W0
-        kern, f, w, I, q, V = _STAGE, self.model.f, self.work, self._I, self._q, self._V
+        kern, f, w, I, q, V = _STAGE, self._fs, self.work, self._I, self._q, self._vs
         vd, n = self._vd, 0
         try:
             for i in range(i0, len(c)):

@@ -11,6 +11,12 @@ One stage of an RKMK method is
     the model's f:     V̇ = f(q, V, t)
     stage_derivative:  KW_i = Ẇ from V̇ (SE(3): Rᵀr̈ - ω × Rᵀṙ), finiteness of KX_i, KW_i
 
+A model may give f in its engine's own velocities (:class:`lgt_bridge.model.EngineVelocity`):
+on the bodies whose ``ENGINE`` column is 1, the engine's velocity ``ve`` is the body-frame
+twist (v_lin, ω) over the body's six twist entries and its f returns (v̇_lin, ω̇) there
+(Pinocchio's free-flyers); :func:`stage` writes ``ve`` after each stage state and
+:func:`stage_derivative` reads such a V̇, so that f needs no conversions of its own.
+
 The numpy reference is :class:`lgt_bridge.integrators.local.LocalProblem` (τ from
 ``lgt.LGT.tau_pose``, rates from the ``groups`` modules); tests hold the two equal.
 """
@@ -26,24 +32,37 @@ from .rotations import cross, from_quat, qmul, rotate, to_quat
 
 guard_cache(__file__, extra=(__file__.replace("stage.py", "linalg.py"),))
 
-# columns of the body table
-PARAM, SE3, CHART, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST = 0, 1, 2, 3, 4, 5, 6, 9, 13
-NCOL = 19
+# columns of the body table (ENGINE: 1 when f takes and gives this body's velocities in the
+# engine's body-frame form, see the module's docstring)
+PARAM, SE3, CHART, ROT_ONLY, XOFF, NROT, POS, ROT, TWIST, ENGINE = 0, 1, 2, 3, 4, 5, 6, 9, 13, 19
+NCOL = 20
 
 # the work array of a problem: one float64 vector holding, at these offsets (``off``),
 # X, W, q, V (the current stage), W0 (the step's start), q_k and the quaternions p_k and p
-# (4 per body), and a scratch Ẋ; off[9:] = nX, nv, nq, nb. One array instead of nine keeps
-# the kernels' argument lists short: a numba call costs ~0.1 µs per argument.
-OX, OW, OQ, OV, OW0, OQK, OPK, OP, OXD, NX_, NV_, NQ_, NB_ = range(13)
+# (4 per body), a scratch Ẋ and the engine's velocity ve; off[10:] = nX, nv, nq, nb and
+# the number of ENGINE bodies. One array instead of ten keeps the kernels' argument lists
+# short: a numba call costs ~0.1 µs per argument.
+OX, OW, OQ, OV, OW0, OQK, OPK, OP, OXD, OVE, NX_, NV_, NQ_, NB_, NE_ = range(15)
+NOFF = 15
 
 
 def work_layout(nX, nv, nq, nb):
-    """(off, size) of a work array for these sizes."""
-    sizes = [nX, nv, nq, nv, nv, nq, 4 * nb, 4 * nb, nX]
-    off = np.zeros(13, np.int64)
-    off[:9] = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    off[9:] = nX, nv, nq, nb
+    """(off, size) of a work array for these sizes (no ENGINE body: :func:`with_engine`)."""
+    sizes = [nX, nv, nq, nv, nv, nq, 4 * nb, 4 * nb, nX, nv]
+    off = np.zeros(NOFF, np.int64)
+    off[:10] = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    off[10:] = nX, nv, nq, nb, 0
     return off, int(sum(sizes))
+
+
+def with_engine(bt, off, rows):
+    """Copies of the body table and offsets with the body rows ``rows`` in the engine's
+    velocity form (column ENGINE = 1)."""
+    bt, off = bt.copy(), off.copy()
+    bt[:, ENGINE] = 0
+    bt[list(rows), ENGINE] = 1
+    off[NE_] = len(rows)
+    return bt, off
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -71,6 +90,7 @@ def body_table(sets, codes):
             t[:, POS:POS + 3] = s.qidx[:, :3]
             t[:, ROT:ROT + nrot] = s.qidx[:, 3:]
         t[:, TWIST:TWIST + s.vidx.shape[1]] = s.vidx
+        t[:, ENGINE] = 0
         tabs.append(t)
     return np.concatenate(tabs) if tabs else np.zeros((0, NCOL), np.int64)
 
@@ -217,10 +237,42 @@ def convert(mode, src, W, p, bt, out):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def stage_derivative(Vd, W, p, bt, KW, KX, i):
-    """KW[i] = Ẇ from the model's V̇; True when KX[i] and KW[i] are finite."""
+def engine_velocity(V, p, bt, ve):
+    """ve = V, but on the ENGINE bodies the body-frame twist (v_lin = Rᵀṙ, ω) over the
+    body's six twist entries (V has (ω, ṙ) there)."""
+    for j in range(V.shape[0]):
+        ve[j] = V[j]
+    for b in range(bt.shape[0]):
+        if bt[b, ENGINE] != 1:
+            continue
+        tw = TWIST
+        i0, i1, i2, j0, j1, j2 = bt[b, tw], bt[b, tw + 1], bt[b, tw + 2], bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
+        x0, x1, x2 = rotate(p[b, 0], -p[b, 1], -p[b, 2], -p[b, 3], V[j0], V[j1], V[j2])
+        ve[i0], ve[i1], ve[i2] = x0, x1, x2
+        ve[j0], ve[j1], ve[j2] = V[i0], V[i1], V[i2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def stage_derivative(Vd, W, p, bt, KW, KX, i, ve, n_engine):
+    """KW[i] = Ẇ from the model's V̇ (on ENGINE bodies the engine's (v̇_lin, ω̇) at the
+    engine velocity ``ve``: ω̇, and r̈ = R (v̇_lin + ω × v_lin) on SO(3)×R³, v̇_lin itself on
+    SE(3)); True when KX[i] and KW[i] are finite."""
     row = KW[i]
     convert(2, Vd, W, p, bt, row)
+    if n_engine > 0:
+        for b in range(bt.shape[0]):
+            if bt[b, ENGINE] != 1:
+                continue
+            tw = TWIST
+            i0, i1, i2 = bt[b, tw], bt[b, tw + 1], bt[b, tw + 2]
+            j0, j1, j2 = bt[b, tw + 3], bt[b, tw + 4], bt[b, tw + 5]
+            a0, a1, a2 = Vd[i0], Vd[i1], Vd[i2]
+            row[i0], row[i1], row[i2] = Vd[j0], Vd[j1], Vd[j2]
+            if bt[b, SE3] == 1:
+                row[j0], row[j1], row[j2] = a0, a1, a2
+            else:
+                c0, c1, c2 = cross(W[i0], W[i1], W[i2], ve[i0], ve[i1], ve[i2])
+                row[j0], row[j1], row[j2] = rotate(p[b, 0], p[b, 1], p[b, 2], p[b, 3], a0 + c0, a1 + c1, a2 + c2)
     ok = True
     for j in range(row.shape[0]):
         if not math.isfinite(row[j]):
@@ -242,9 +294,9 @@ def pack_tables(bt, vt, off):
 @njit(cache=True, error_model="numpy", inline="always")
 def tables(I):
     """(bt, vt, off) of an array made by :func:`pack_tables` (views)."""
-    nb, nv = I[13], I[14]
-    o = 15 + nb * NCOL
-    return I[15:o].reshape((nb, NCOL)), I[o:o + 4 * nv].reshape((nv, 4)), I[:13]
+    nb, nv = I[NOFF], I[NOFF + 1]
+    o = NOFF + 2 + nb * NCOL
+    return I[NOFF + 2:o].reshape((nb, NCOL)), I[o:o + 4 * nv].reshape((nv, 4)), I[:NOFF]
 
 
 _V, _VC, _MC, _IC, _IMC = "float64[:]", "float64[::1]", "float64[:, ::1]", "int64[::1]", "int64[:, ::1]"
@@ -287,13 +339,17 @@ def stage(Vd, KX, KW, a, i, h, w, I):
     body and vector tables and the work array's offsets (:func:`pack_tables`)."""
     bt, vt, off = tables(I)
     X, W, q, V, W0, qk, pk, p = views(w, off)
+    ve = w[off[OVE]:off[OVE] + off[NV_]]
     if Vd.shape[0] > 0:
-        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
+        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1, ve, off[NE_]):
             return -1.0
     if a.shape[0] == 0:
         return 0.0
     Xd = KX[i] if i < KX.shape[0] else w[off[OXD]:off[OXD] + off[NX_]]
-    return stage_state(KX, KW, a, i, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p)
+    c = stage_state(KX, KW, a, i, h, W0, X, W, bt, vt, qk, pk, q, V, Xd, p)
+    if off[NE_] > 0:
+        engine_velocity(V, p, bt, ve)
+    return c
 
 
 @njit(cache=True, error_model="numpy")
@@ -385,7 +441,7 @@ def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     bt, vt, off = tables(I)
     X, W, q, V, W0, qk, pk, p = views(w, off)
     if Vd.shape[0] > 0:
-        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1):
+        if not stage_derivative(Vd, W, p, bt, KW, KX, i - 1, w[off[OVE]:off[OVE] + off[NV_]], off[NE_]):
             return -1.0, 0.0, 0.0, 0.0, 0.0, 0.0
     b = T[0]
     stage_state(KX, KW, b, b.shape[0], h, W0, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p)
