@@ -76,11 +76,16 @@ def check_state(model, q0=None, V0=None):
                 raise InputError(f"{name}: entry {i} ({lay.owner(kind, i)}) is {arr[i]}; "
                                  "give a finite initial state.")
     # the bodies' coordinates and the mass matrix at q0: checked once per model and q0 (a
-    # model's structure does not change; repeated runs from one state skip the checks)
+    # model's structure does not change; repeated runs from one state skip the checks), the
+    # coordinates once per layout object and q0 (models wrapped afresh per run of one engine
+    # model share their layout)
     memo = getattr(model, "__dict__", {})
     key = q0.tobytes()
     if memo.get("_lgt_checked_q0") != key:
-        validate_bodies(lay, q0)
+        lay_memo = getattr(lay, "__dict__", {})
+        if lay_memo.get("_lgt_valid_q0") != key:
+            validate_bodies(lay, q0)
+            lay_memo["_lgt_valid_q0"] = key
         check_mass(model, q0)
         memo["_lgt_checked_q0"] = key
     return q0, V0
