@@ -38,9 +38,9 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
     q0, V0 : ndarray, optional
         Initial state in the model's own coordinates (default: the model's ``q0``, ``V0``).
     t_eval : array_like, optional
-        Output times (default: every step). Fixed-step methods land on them; dopri5, dop853 and
-        radau5 interpolate them with their continuous extension (through τ), so output times
-        never shorten their steps.
+        Output times (default: every step; empty: none). Fixed-step methods land on them;
+        dopri5, dop853 and radau5 interpolate them with their continuous extension (through
+        τ), so output times never shorten their steps.
     progress : bool, optional
         None (default) shows a tqdm bar on stderr (simulated time, steps, f evaluations, current
         step size, rate) once the run has taken more than about 1 s, and only when stderr is a

@@ -398,7 +398,8 @@ class Simulation:
         t_end : float
             The end of this stretch (> the current time).
         t_eval : array_like, optional
-            Output times within the stretch (default: every step, the start included).
+            Output times within the stretch (default: every step, the start included; empty:
+            none, the state still advanced to ``t_end``).
         progress : bool, optional
             As :func:`~lgt_bridge.simulate`.
         events : callable or list of callable, optional
@@ -430,7 +431,7 @@ class Simulation:
         ts, qs, Vs = [], [], []
         record_all = t_eval is None
         targets = [t1] if record_all else [t for t in t_eval if t > t0]
-        if record_all or t_eval[0] == t0:
+        if record_all or (len(t_eval) and t_eval[0] == t0):
             ts.append(t0), qs.append(st.q.copy()), Vs.append(st.V.copy())
         bar = simulation_bar(progress, t0, t1, self, st)
 

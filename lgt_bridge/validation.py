@@ -92,11 +92,18 @@ def check_state(model, q0=None, V0=None):
 
 
 def check_t_eval(t_eval, t0, t1):
+    """t_eval as a float array (None: every step; empty: no output, the run still advances),
+    finite, strictly increasing and within [t0, t1]."""
     if t_eval is not None:
         t_eval = np.asarray(t_eval, float).ravel()
-        if not np.isfinite(t_eval).all() or np.any(np.diff(t_eval) <= 0):
+        if not t_eval.size:
+            return t_eval
+        first, last = float(t_eval[0]), float(t_eval[-1])
+        # strictly increasing with finite ends: finite throughout (a NaN makes the min NaN)
+        rising = t_eval.size == 1 or float((t_eval[1:] - t_eval[:-1]).min()) > 0.0
+        if not (rising and math.isfinite(first) and math.isfinite(last)):
             raise InputError("t_eval must be finite and strictly increasing.")
-        if t_eval[0] < t0 or t_eval[-1] > t1:
+        if first < t0 or last > t1:
             raise InputError(f"t_eval must lie within t_span [{t0}, {t1}].")
     return t_eval
 

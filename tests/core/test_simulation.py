@@ -130,3 +130,28 @@ def test_a_horizons_end_is_met_without_a_sliver_step_and_the_step_carries_on():
         if k > 1:
             shortest, longest = min(shortest, h.min()), max(longest, h.max())
     assert longest > 0 and shortest > 0.3 * longest
+
+
+@pytest.mark.parametrize("t_eval,why", [
+    ([0.0, np.nan, 0.1], "finite and strictly increasing"),
+    ([0.0, np.inf], "finite and strictly increasing"),
+    ([0.05, 0.05], "finite and strictly increasing"),
+    ([0.06, 0.02], "finite and strictly increasing"),
+    ([-0.01, 0.05], "within t_span"),
+    ([0.05, 0.2], "within t_span"),
+])
+def test_bad_t_eval_is_refused_before_any_step(t_eval, why):
+    with pytest.raises(InputError, match=why):
+        simulate(scenes.free_body(), (0, 0.1), method="dopri5", t_eval=t_eval)
+
+
+def test_empty_t_eval_advances_without_outputs():
+    """t_eval=[]: no output rows (scipy's solve_ivp accepts it too), the run still reaches
+    t_end: the next stretch continues from there, equal to one run to the end."""
+    tight = dict(method="dop853", rtol=1e-10, atol=1e-10)
+    ref = simulate(scenes.heavy_top(False), (0, 0.2), t_eval=[0.2], **tight)
+    sim = Simulation(scenes.heavy_top(False), **tight)
+    r = sim.run(0.1, t_eval=[])
+    assert r.success and r.t.shape == (0,) and r.q.shape == (0, len(sim.q)) and sim.t == pytest.approx(0.1)
+    r2 = sim.run(0.2, t_eval=np.array([0.2]))
+    assert np.abs(r2.q[-1] - ref.q[-1]).max() < 1e-8
