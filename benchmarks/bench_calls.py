@@ -109,6 +109,7 @@ def robots_free(names, tols):
         zero = np.zeros(model.nv)
         w_aba, _ = best(lambda: [pin.aba(model, data, q0, v0, zero) for _ in range(2000)])
         aba = w_aba / 2000
+        floor = _stage_floor(model, q0, v0) / aba
         group, pts = min(bridge, key=lambda g: cost_at_error([(e, w) for e, w, _ in g[1]], TARGET)[0] or np.inf)
         wb, _ = cost_at_error([(e, w) for e, w, _ in pts], TARGET)
         nfb, _ = cost_at_error([(e, n) for e, _, n in pts], TARGET)
@@ -121,7 +122,30 @@ def robots_free(names, tols):
         rows.append(dict(case=f"(a) {name}: bridge's whole call / (its f count × one pin.aba)",
                          ratio=row["whole_call_over_f_aba"], target=1.3,
                          met=None if row["whole_call_over_f_aba"] is None else row["whole_call_over_f_aba"] <= 1.3))
+        rows.append(dict(case=f"(a) {name}: floor of a stage loop driven from Python (per f: one stage "
+                              "kernel call and one pin.aba, nothing else) / one pin.aba",
+                         ratio=floor, target="–", met=None))
     return rows
+
+
+def _stage_floor(model, q0, v0, n=2000):
+    """Seconds per f of the cheapest loop an explicit method driven from Python can run: per
+    stage one call of the compiled stage kernel (on a PinocchioModel's dop853 problem, its
+    arguments prepared) and one pin.aba on the kernel's (q, v), in a bare for loop."""
+    from lgt_bridge.integrators.compiled import _STAGE
+    from lgt_pinocchio import PinocchioModel
+    pm = PinocchioModel(model, q0=q0, v0=v0)
+    st = Simulation(pm, method="dop853", rtol=1e-9, atol=1e-9).stepper
+    prob, KX, KW, a = st.prob, st.KX, st.KW, st._A[3]
+    w, I, q, v = prob.work, prob._I, prob._q, prob._vs
+    f = pm.engine_velocity.f if pm.engine_velocity is not None else pm.f
+    vd = np.ascontiguousarray(f(q, v, 0.0), dtype=float)
+
+    def loop():
+        for _ in range(n):
+            _STAGE(vd, KX, KW, a, 3, 1e-3, w, I)
+            f(q, v, 0.0)
+    return best(loop)[0] / n
 
 
 def _pose_error(pm, q, q_ref):
@@ -428,7 +452,8 @@ def report(rows, meta, out):
                      f"{'–' if r['met'] is None else ('met' if r['met'] else '**missed**')} |")
     lines += ["", "Ratios: baseline / bridge for speed-ups (target: at least), bridge / baseline for (c), (d2) and (e) "
               "(target: at most); (a) second row: the bridge's whole call over its f count × one pin.aba "
-              "(target: at most)."]
+              "(target: at most); (a) third row: the same for the cheapest stage loop Python can drive (no step "
+              "control, no set-up), the floor under the second row."]
     out.mkdir(parents=True, exist_ok=True)
     (out / "calls.json").write_text(json.dumps(dict(meta=meta, rows=rows), indent=1, default=float))
     (out / "calls.md").write_text("\n".join(lines) + "\n")
