@@ -18,7 +18,8 @@ inactive when its force would pull), and its forces come from that set. Such a m
    as the mode's ``test_points(h)`` asks for: Exudyn's spheres move less than half a radius
    between two), on the step's continuous extension; in the first interval where it differs from the step's
    mode, the switch is located by bisection to ``xtol`` (as events: 0.01·tol·h, not below
-   4·eps·abs(t)), and the step is cut there: the stepper restarts (``restart_at``) at the
+   4·eps·abs(t); a mode with ``partial = True`` is a tuple of per-item values whose call
+   takes ``items=``: the bisection asks only the items that differ at the bracket's end), and the step is cut there: the stepper restarts (``restart_at``) at the
    bracket's upper end, with the state of the step's continuous extension there (the old
    mode's solution, a time ``xtol`` past the switch at most) and the new mode.
 
@@ -82,10 +83,7 @@ class SwitchLocator:
                 proj.iterations = it        # the statistics count the steps' projections only
             return np.array(q, float), np.array(V, float)
 
-        def switched(s):
-            return self.mode(*state(s), s) != m0
-
-        end_switched = self.mode(q1, V1, t1) != m0
+        m1 = self.mode(q1, V1, t1)
         n = self.SAMPLES
         more = getattr(self.mode, "test_points", None)
         if more is not None:                # the model's own count (e.g. from how far it moved)
@@ -93,15 +91,26 @@ class SwitchLocator:
         lo, hi = t, None
         for k in range(1, n + 1):
             s = t + h * k / (n + 1)
-            if switched(s):
-                hi = s
+            m = self.mode(*state(s), s)
+            if m != m0:
+                hi, m1 = s, m
                 break
             lo = s
         if hi is None:
-            if not end_switched:
+            if m1 == m0:
                 self.mode(q1, V1, t1)       # the step's mode again, set from its end state
                 return accepted, h_new, None
             hi = t1
+        items = None                        # a partial mode: bisect on the items that differ at hi
+        if getattr(self.mode, "partial", False):
+            items = [i for i, (a, b) in enumerate(zip(m0, m1)) if a != b]
+            ref = tuple(m0[i] for i in items)
+
+        def switched(s):
+            if items is None:
+                return self.mode(*state(s), s) != m0
+            return self.mode(*state(s), s, items=items) != ref
+
         xtol = max(0.01 * self.tol * h, 4 * _EPS * abs(t1))
         while hi - lo > xtol:
             mid = 0.5 * (lo + hi)

@@ -44,20 +44,26 @@ class ContactModes:
             self.spheres = []
         self._trail = []                 # the spheres at the last two calls
 
-    def __call__(self, q, V, t):
-        """Set the active sets from the state (q, V, t) (Exudyn's PostNewton) and return them."""
+    #: the mode is a tuple over ``items``; a call may ask for some of them (``items=``)
+    partial = True
+
+    def __call__(self, q, V, t, items=None):
+        """Set the active sets from the state (q, V, t) (Exudyn's PostNewton) and return them:
+        one tuple per sphere and cable (``items``: of those items only; the spheres' travel
+        is recorded for :meth:`test_points` on calls asking for all)."""
         m = self.model
         m.write_back(q, V, t)
         m.solver.PostNewton(self.mbs, m.engine.settings)
-        if self.spheres:
+        its = self.items if items is None else [self.items[i] for i in items]
+        if items is None and self.spheres:
             self._trail = self._trail[-1:] + [self._spheres()]
-        return tuple(tuple(np.asarray(gc.GetActiveContacts(kind, j)).tolist()) for gc, kind, j in self.items)
+        return tuple(tuple(np.asarray(gc.GetActiveContacts(kind, j)).tolist()) for gc, kind, j in its)
 
     def _spheres(self):
         """Positions and speeds of the spheres where PostNewton last put them."""
         data = [gc.GetSphereMarkerBased(j) for gc, j in self.spheres]
         return (np.array([d["position"] for d in data]),
-                np.array([np.linalg.norm(d["velocity"]) for d in data]))
+                np.linalg.norm(np.array([d["velocity"] for d in data]), axis=1))
 
     def test_points(self, h):
         """Interior test points for the step of length h between the states of the last two
