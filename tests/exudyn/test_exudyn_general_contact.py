@@ -87,7 +87,7 @@ def test_exudyns_own_generalized_alpha_refined_tends_to_the_same_motion():
     the step), so each switch costs it an O(h) error: refined from 1e-3 to 1.5625e-5 its
     error against the exact motion falls from 0.42 to 9.4e-3 (velocities; positions hold
     about 3 digits at the finest step), towards the motion the bridge's located switches
-    give to 1e-9 at 1e-10."""
+    give to 1e-9 at 1e-10; on the sphere column likewise."""
     exact, _ = _floor_exact()
     errs = []
     for k in (0, 3, 6):
@@ -100,6 +100,23 @@ def test_exudyns_own_generalized_alpha_refined_tends_to_the_same_motion():
     assert errs[2] < errs[1] < errs[0] and errs[2] < 0.05 * errs[0], errs
     x, _ = _solve_dynamic("dop853", 1e-10)
     assert np.abs(x - exact).max() < 1e-6 * errs[2]
+    # the sphere column: 6.8e-3, 4.2e-4, 4.9e-5 (positions 8.7e-6 → 2.1e-7) at 1e-3, 1.25e-4,
+    # 1.5625e-5, against the bridge's 3.1e-11 (dop853 at 1e-10)
+    C = sm.COLUMN
+    (ys, vs), _ = cr.column([C["y0"] + C["dy"] * i for i in range(3)], -1.0, 0.4)
+    errs = []
+    for k in (0, 3, 6):
+        mbs, s = sm.general_contact_column(steps=400 * 2 ** k)
+        mbs.SolveDynamic(s)
+        sd = mbs.systemData
+        q = np.array(sd.GetODE2Coordinates()) + np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
+        errs.append(np.abs(np.r_[q[1::3] - ys, np.array(sd.GetODE2Coordinates_t())[1::3] - vs]).max())
+    assert errs[2] < errs[1] < errs[0] and errs[2] < 0.05 * errs[0], errs
+    mbs, s = sm.general_contact_column()
+    SolveDynamic(mbs, s, method="dop853", rtol=1e-10, atol=1e-10)
+    sd = mbs.systemData
+    q = np.array(sd.GetODE2Coordinates()) + np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
+    assert np.abs(np.r_[q[1::3] - ys, np.array(sd.GetODE2Coordinates_t())[1::3] - vs]).max() < 1e-5 * errs[2]
 
 
 def test_general_contact_failure_names_it_in_one_line_and_keeps_the_steps():
