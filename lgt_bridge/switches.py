@@ -122,6 +122,8 @@ class SwitchLocator:
                 lo = mid
         qe, Ve = state(hi)
         st.restart_at(qe, Ve, hi)
+        if st.dense is None:                # outputs before the cut still read the step's extension
+            st.dense = dense
         self.mode(st.q, st.V, hi)          # the new mode, from the state where it switched
         self.t_switches.append(hi)
         return accepted, h_new, hi

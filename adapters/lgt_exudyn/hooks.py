@@ -229,8 +229,9 @@ def general_contacts(mbs, located=True):
     none. Its forces come from the active sets its PostNewton sets from the state (a pair is
     active while its gap is closed and its force compressive): the bridge takes them at each
     step's start and, with a method that has dense output (``located``), locates where they
-    switch inside the step and restarts there (:mod:`lgt_bridge.switches`); without, a step
-    across a switch meets the jump of the contact damping force. Names each one with its
+    switch inside the step and restarts there (:mod:`lgt_bridge.switches`); without (or when
+    the system's data coordinates make it run Exudyn's discontinuous iteration instead), a
+    step across a switch meets the jump of the contact damping force. Names each one with its
     parts."""
     parts = []
     for i in range(_contact.count(mbs)):
@@ -250,6 +251,7 @@ def general_contacts(mbs, located=True):
         return (head + "; lgt_bridge located these switches and restarted at each, so the failure is not a "
                 "step across one: the contact phase itself needs smaller steps (stiff contact: "
                 "use method='radau5' or 'genalpha', or lower minimumStepSize).")
-    return (head + ", and lgt_bridge does not locate these switches with a method without dense output, so "
-            "a step across one meets the jump of the contact damping force. Use method='dopri5', "
-            "'dop853' or 'radau5' (switches located), loosen the tolerances, or use method='genalpha'.")
+    return (head + ", and lgt_bridge does not locate these switches here (a method without dense output, or "
+            "a system with data coordinates, whose discontinuous iteration runs instead), so a step across "
+            "one meets the jump of the contact damping force. Use method='dopri5', 'dop853' or 'radau5' "
+            "(switches located), loosen the tolerances, or use method='genalpha'.")
