@@ -23,6 +23,7 @@ import numpy as np
 from . import auto as _auto
 from . import diagnosis as _diagnosis
 from . import events as _events
+from . import switches as _switches
 from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
 from .integrators.constraints import Projector, note_initial_projection, project_initial
@@ -150,6 +151,7 @@ class Simulation:
         self.model, self.stepper = model, stepper
         self.max_step = np.inf
         self._post = getattr(model, "post_step", None)
+        self._switches = _switches.locator(self, model)     # a model's mode switches (contact)
         self.dt, self.t, self.max_steps = dt, float(t0), max_steps
         self._t_start = float(t0)
         self._q_start = np.array(q0, float)
@@ -227,6 +229,8 @@ class Simulation:
             out["n_jacobians"] = st.n_jacobians
         if self.initial_projection is not None:
             out["initial_projection"] = self.initial_projection
+        if getattr(self, "_switches", None) is not None:
+            out["n_switches"] = len(self._switches.t_switches)
         if self.choice is not None:
             out["auto"] = self.choice.as_dicts()
         return out
@@ -242,9 +246,11 @@ class Simulation:
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
-        post = self._post
+        post, cut = self._post, None
         try:
-            if post is None:
+            if post is None and self._switches is not None:
+                accepted, h_new, cut = self._switches.attempt(self.t, h_try)
+            elif post is None:
                 accepted, h_new = st.attempt(self.t, h_try)
             else:
                 accepted, h_new = self._attempt_discontinuous(h_try, post)
@@ -252,7 +258,7 @@ class Simulation:
             raise StepFailed(str(exc), error=ModelError) from exc
         if accepted:
             self.n_steps += 1
-            self.t = target if hit else self.t + h_try
+            self.t = cut if cut is not None else (target if hit else self.t + h_try)
             self.model.write_back(st.q, st.V, self.t)
             if st.adaptive:
                 self.h = min(h_new if h_try >= self.h else self.h * min(1.0, h_new / h_try), self.max_step)

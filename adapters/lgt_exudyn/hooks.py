@@ -9,6 +9,7 @@ import numpy as np
 
 from lgt_bridge.errors import InputError
 
+from . import contact as _contact
 from .constraints import ConstraintRows
 from .engine import engine_call
 from .sparse import LAM
@@ -17,6 +18,21 @@ from .sparse import LAM
 class StepHooks:
     """The drop-in's per-step methods of :class:`~lgt_exudyn.model.ExudynModel` (they use its
     parts: ``engine``, ``nodes``, ``cons``, ``sd``, ``mbs``)."""
+
+    def _take_discontinuous(self, settings):
+        """The discontinuous parts of the system: data coordinates (contact and friction
+        states: ``post_step``, Exudyn's discontinuous iteration after each step), or else a
+        GeneralContact's active sets (``switch_mode``: switches located in time,
+        :mod:`lgt_bridge.switches`)."""
+        mbs, engine = self.mbs, self.engine
+        if self.sd.DataSize():
+            self.post_step = self._post_newton
+            s = settings if settings is not None else engine.exu.SimulationSettings()
+            self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
+            self._gap_rows = gap_rows(mbs)
+            refuse_impact_models(mbs)
+        elif _contact.count(mbs):
+            self.switch_mode = _contact.ContactModes(self)
 
     def _connector_state(self):
         """What decides which AE rows are constraints and can be changed between steps:
@@ -208,19 +224,17 @@ def refuse_impact_models(mbs):
                 "contactDamping for the dissipation.")
 
 
-def general_contacts(mbs):
+def general_contacts(mbs, located=True):
     """What a failed step should say about Exudyn's GeneralContact, or "" when the system has
-    none: its contact forces switch on and off with the gaps inside each force evaluation
-    (it keeps no contact state between steps, unlike ObjectContactSphereSphere's data
-    coordinates), so the bridge runs it as a force model and does not locate the switches;
-    a step across one meets the jump of the contact damping force (at rtol = atol = 1e-10
-    dopri5's steps collapse at the first touch). Names each one with its parts."""
-    try:
-        n = int(mbs.NumberOfGeneralContacts())
-    except Exception:
-        return ""
+    none. Its forces come from the active sets its PostNewton sets from the state (a pair is
+    active while its gap is closed and its force compressive): the bridge takes them at each
+    step's start and, with a method that has dense output (``located``), locates where they
+    switch inside the step and restarts there (:mod:`lgt_bridge.switches`); without (or when
+    the system's data coordinates make it run Exudyn's discontinuous iteration instead), a
+    step across a switch meets the jump of the contact damping force. Names each one with its
+    parts."""
     parts = []
-    for i in range(n):
+    for i in range(_contact.count(mbs)):
         try:
             d = mbs.GetGeneralContact(i).GetPythonObject()
             what = [f"{int(d.get(key, 0))} {name}" for key, name in
@@ -231,8 +245,13 @@ def general_contacts(mbs):
         parts.append(f"GeneralContact {i}" + (f" ({', '.join(what)})" if what else ""))
     if not parts:
         return ""
-    return (f" The system has {' and '.join(parts)}: its contact forces switch on and off with the gaps "
-            "inside each force evaluation (no contact state between steps, unlike ObjectContactSphereSphere), "
-            "and lgt_bridge does not locate these switches, so a step across one meets the jump of the "
-            "contact damping force. Loosen the tolerances (each switch then costs a few rejected steps), "
-            "or use method='radau5' or method='genalpha'.")
+    head = (f" The system has {' and '.join(parts)}: its contact forces switch on and off where a gap "
+            "closes or a contact force would pull (Exudyn's active sets)")
+    if located:
+        return (head + "; lgt_bridge located these switches and restarted at each, so the failure is not a "
+                "step across one: the contact phase itself needs smaller steps (stiff contact: "
+                "use method='radau5' or 'genalpha', or lower minimumStepSize).")
+    return (head + ", and lgt_bridge does not locate these switches here (a method without dense output, or "
+            "a system with data coordinates, whose discontinuous iteration runs instead), so a step across "
+            "one meets the jump of the contact damping force. Use method='dopri5', 'dop853' or 'radau5' "
+            "(switches located), loosen the tolerances, or use method='genalpha'.")

@@ -20,7 +20,7 @@ from . import constraints as _constraints
 from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error
 from .layout import NodeLayout, constant_twist_mass
-from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
+from .hooks import StepHooks, has_prestep
 from .ode1 import ODE1States
 
 #: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
@@ -95,13 +95,7 @@ class ExudynModel(StepHooks, Model):
         self._take_rows()
         # connectors a pre-step user function may switch (read once here, then each step)
         self._connectors = self._connector_state() if has_prestep(mbs) else None
-        if sd.DataSize():
-            # contact/friction states: Exudyn's own discontinuous iteration after each step
-            self.post_step = self._post_newton
-            s = simulationSettings if simulationSettings is not None else engine.exu.SimulationSettings()
-            self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
-            self._gap_rows = gap_rows(mbs)
-            refuse_impact_models(mbs)
+        self._take_discontinuous(simulationSettings)     # contact states and modes (hooks.py)
         self.Mbar = constant_twist_mass(engine, nodes, self.q0)
         self.ode1 = None
         if sd.ODE1Size():

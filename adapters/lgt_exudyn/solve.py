@@ -339,7 +339,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         print(f"lgt-bridge: SolveDynamic {describe(st)}: {sim.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")
     if failure:
-        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]}{general_contacts(mbs)} The system is left "
+        located = stepper.dense_capable and hasattr(model, "switch_mode")     # GeneralContact switches
+        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]}{general_contacts(mbs, located)} The system is left "
                         f"at t = {sim.t:.9g}.")
     if updateInitialValues:
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)

@@ -346,32 +346,7 @@ def test_smooth_fourbar_error_falls_with_the_tolerance_down_to_1e_12():
     assert errs[-1] < 2e-10, errs
 
 
-# --- item 4: GeneralContact ------------------------------------------------------------------
-
-def test_general_contact_failure_names_it_in_one_line_and_keeps_the_steps():
-    """Exudyn's GeneralContact (spheres on a triangle floor) switches its contact forces inside
-    each force evaluation; the bridge runs it as a force model without locating the switches.
-    At rtol = atol = 1e-10 dopri5's steps collapse at the first touch (t ≈ 0.1): the StepError
-    is one line naming the GeneralContact, its parts and why; the steps before are kept (the
-    free fall there is exact: y = -t - g t²/2 to 1e-9). genalpha at Exudyn's steps gives
-    Exudyn's own generalized-α result (both step over the switches the same way)."""
-    from lgt_bridge import StepError
-    mbs, s = sm.general_contact_spheres()
-    with pytest.raises(StepError) as exc:
-        SolveDynamic(mbs, s, method="dopri5", rtol=1e-10, atol=1e-10)
-    msg = str(exc.value)
-    assert "\n" not in msg and "GeneralContact 0 (2 spheres, 2 triangles)" in msg
-    assert "does not locate these switches" in msg and "genalpha" in msg
-    t = mbs.systemData.GetTime()
-    assert 0.09 < t < 0.11 and mbs.sys["lgtBridgeStats"]["n_steps"] > 50
-    y = np.array(mbs.systemData.GetODE2Coordinates())[[1, 4]]
-    assert np.abs(y - (-t - 0.5 * 9.81 * t ** 2)).max() < 1e-9
-    mbs, s = sm.general_contact_spheres()
-    mbs.SolveDynamic(s)
-    exu_q = np.array(mbs.systemData.GetODE2Coordinates())
-    mbs, s = sm.general_contact_spheres()
-    SolveDynamic(mbs, s, method="genalpha")
-    assert np.abs(np.array(mbs.systemData.GetODE2Coordinates()) - exu_q).max() < 1e-6
+# --- item 4: GeneralContact: tests/exudyn/test_exudyn_general_contact.py --------------------------
 
 
 # --- item 9: genalpha's Newton test on larger chains -------------------------------------------

@@ -345,3 +345,33 @@ def newtons_cradle(n=3, impact_model=2, restitution=0.9, t_end=0.2, steps=200, g
                                       restitutionCoefficient=restitution)
     mbs.Assemble()
     return mbs, settings(t_end, steps), balls
+
+
+def general_contact_column(n=3, k=1e4, d=10.0, t_end=0.4, steps=400):
+    """A column of n mass points (0.1 kg) as GeneralContact spheres (r = 0.1) over a triangle
+    floor, as Exudyn's generalContactSpheresTest writes its spheres (AddSphereWithMarker on
+    MarkerNodePosition, sphere-sphere contact on): dropped at 1 m/s, 0.25 m apart, away from
+    the floor's diagonal edge; the lowest bounces on the floor and knocks the others up.
+    Returns (mbs, settings); heights in ``COLUMN`` (x = 0.5, z = 0.2 for all)."""
+    mbs = _system()
+    gc = mbs.AddGeneralContact()
+    gc.verboseMode = 0
+    for i in range(n):
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.5, COLUMN["y0"] + COLUMN["dy"] * i, 0.2],
+                                   initialVelocities=[0, -1, 0]))
+        mbs.AddObject(MassPoint(mass=0.1, nodeNumber=nd))
+        mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+        mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -0.981, 0]))
+        gc.AddSphereWithMarker(mk, radius=0.1, contactStiffness=k, contactDamping=d, frictionMaterialIndex=0)
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=mg, contactStiffness=k, contactDamping=d,
+                                  frictionMaterialIndex=0, pointList=[[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
+                                  triangleList=[[0, 2, 1], [0, 3, 2]])
+    gc.SetFrictionPairings(0.0 * np.eye(1))
+    gc.SetSearchTreeCellSize(numberOfCells=[4, 4, 4])
+    mbs.Assemble()
+    return mbs, settings(t_end, steps)
+
+
+COLUMN = dict(y0=0.15, dy=0.25)

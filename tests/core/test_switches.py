@@ -1,0 +1,76 @@
+"""lgt_bridge.switches: a model's discrete mode kept through each step and its switches
+located on the step's dense output, against the closed-form motion of a point dropped on a
+penalty floor whose contact is active while its gap is closed and its force compressive
+(tests/models/contact_reference.py; the rule of Exudyn's GeneralContact active sets)."""
+import numpy as np
+import pytest
+
+from lgt_bridge import Simulation, simulate
+from lgt_bridge.model import Layout, Model
+
+import contact_reference as cr
+
+R, M, G, K, D = 0.1, 0.1, 9.81, 5e3, 20.0
+
+
+class _Drop(Model):
+    """A mass point over the floor y = 0 (vector-space y), its contact force from the mode
+    (``active``) set by switch_mode only, as Exudyn's active sets are."""
+
+    def __init__(self, y0=0.55, with_switches=True):
+        self.layout = Layout.stacked([], n_vector=1)
+        self.q0, self.V0 = np.array([y0]), np.array([-1.0])
+        self.active = False
+        if with_switches:
+            self.switch_mode = self._mode
+
+    def _mode(self, q, V, t):
+        gap = q[0] - R
+        self.active = bool(gap < 0 and K * gap + D * V[0] < 0)
+        return self.active
+
+    def f(self, q, V, t):
+        F = -(K * (q[0] - R) + D * V[0]) if self.active else 0.0
+        return np.array([-G + F / M])
+
+
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_switches_located_and_error_falls_with_tolerance(method):
+    (y, v), sw = cr.drop(0.55, -1.0, 0.5)
+    errs = []
+    for tol in (1e-10, 1e-12):
+        sim = Simulation(_Drop(), method=method, rtol=tol, atol=tol, t_end=0.5)
+        r = sim.run(0.5)
+        assert r.success and r.stats["n_switches"] == len(sw)
+        # located to the step's continuous extension's accuracy (xtol = 0.01 tol h)
+        assert np.abs(np.array(sim._switches.t_switches) - sw).max() < 100 * tol
+        errs.append(max(abs(r.q[-1, 0] - y), abs(r.V[-1, 0] - v)))
+    assert errs[0] < 2e-9 and errs[1] < 2e-11 and errs[1] < errs[0] / 10, errs
+
+
+def test_outputs_across_cut_steps_follow_the_exact_motion():
+    """t_eval outputs come from the dense output of steps that were cut at a switch: only
+    the part before the cut is used."""
+    ts = np.linspace(0.0, 0.5, 201)[1:]
+    r = simulate(_Drop(), (0.0, 0.5), method="dop853", rtol=1e-11, atol=1e-11, t_eval=ts)
+    ref = np.array([cr.drop(0.55, -1.0, t)[0][0] for t in ts])
+    assert r.success and np.abs(r.q[:, 0] - ref).max() < 1e-9
+
+
+def test_without_dense_output_the_mode_comes_from_each_steps_start():
+    """rkmk4 (no dense output) takes the mode at each step's start, as Exudyn's own steps do:
+    the point bounces (it would fall through with the mode never set) and the error is
+    first order in the step (one step's worth of the damping jump per switch)."""
+    (y, v), _ = cr.drop(0.55, -1.0, 0.5)
+    errs = []
+    for dt in (1e-4, 2.5e-5):
+        r = simulate(_Drop(), (0.0, 0.5), method="rkmk4", dt=dt)
+        assert r.success and r.q[:, 0].min() > 0.09
+        errs.append(abs(r.V[-1, 0] - v))
+    assert errs[1] < errs[0] / 2.5, errs
+
+
+def test_a_model_without_switch_mode_is_untouched():
+    r = simulate(_Drop(with_switches=False), (0.0, 0.5), method="dopri5", rtol=1e-8, atol=1e-8)
+    assert "n_switches" not in r.stats
+    assert abs(r.q[-1, 0] - (0.55 - 0.5 - 0.5 * G * 0.25)) < 1e-9       # free fall: no mode ever set
