@@ -160,7 +160,8 @@ class Simulation:
         self.n_steps = 0
         self.n_redone = 0
         span = (t_end - self.t) if t_end is not None else (dt or 1.0) * 1e2
-        self.h_event = 1e-7 * max(span, 1e-300)     # switches of discontinuous states located to this
+        # switches of discontinuous states are located to h_event (finer at tighter tolerances)
+        self.h_event = min(1e-7, getattr(self, "rtol", 0.0) or 1e-7) * max(span, 1e-300)
         self.initial_projection = None
         if consistent and model.n_constraints:
             own = getattr(model, "project_initial", None)     # an engine's own rule, if it has one
@@ -310,9 +311,10 @@ class Simulation:
             if not accepted or not post(st.q, st.V, self.t + h):
                 break
             st.restore(snap)
-            if h > self.h_event:
+            floor = max(self.h_event, self.min_step)      # (no finer than the run's min_step)
+            if h > floor:
                 m.set_discontinuous_state(d0)
-                return False, 0.25 * h
+                return False, max(0.25 * h, floor)
             self.n_redone += 1
             accepted, h_new = st.attempt(self.t, h)
         return accepted, h_new

@@ -29,7 +29,7 @@ class StepHooks:
             self.post_step = self._post_newton
             s = settings if settings is not None else engine.exu.SimulationSettings()
             self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
-            self._gap_rows = gap_rows(mbs)
+            self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
             refuse_impact_models(mbs)
         elif _contact.count(mbs):
             self.switch_mode = _contact.ContactModes(self)
@@ -202,6 +202,30 @@ def gap_rows(mbs):
                 rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[0]))
             except Exception:
                 pass
+    return np.array(rows, int)
+
+
+def mode_rows(mbs):
+    """Indices, among the system's data coordinates, of the modes whose sign is a state of a
+    CoordinateSpringDamperExt: its limit-stop state data[2] (0 free, < 0 / > 0 at the lower /
+    upper stop) and its bristle friction's mode data[0] (0 stick, ±f slip). Exudyn's
+    PostNewton measures their switches by a force error from the last step's penetration,
+    which misses a stop left after a shallow penetration: a step longer than Exudyn's would
+    then keep pulling the mass back until its end."""
+    sd, rows = mbs.systemData, []
+    for k in range(sd.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        if str(o.get("objectType", "")).removeprefix("Object") != "ConnectorCoordinateSpringDamperExt" or \
+                int(o.get("nodeNumber", -1)) < 0:
+            continue
+        try:
+            base = int(sd.GetNodeLTGData(int(o["nodeNumber"]))[0])
+        except Exception:
+            continue
+        friction = [float(o.get(k, 0.0)) for k in ("dynamicFrictionForce", "staticFrictionOffsetForce",
+                                                   "fDynamicFriction", "fStaticFrictionOffset")]  # (old names)
+        bristle = float(o.get("frictionProportionalZone", 0.0)) == 0.0 and any(f != 0.0 for f in friction)
+        rows += ([base] if bristle else []) + ([base + 2] if o.get("useLimitStops", False) else [])
     return np.array(rows, int)
 
 

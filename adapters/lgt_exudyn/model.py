@@ -162,19 +162,25 @@ class ExudynModel(StepHooks, Model):
         friction states updated from the state (q, V, t)); True when they changed by more
         than timeIntegration.discontinuous.iterationTolerance."""
         self.write_back(q, V, t)
-        gaps = self._gap_rows
-        d0 = np.array(self.sd.GetDataCoordinates())[gaps] if len(gaps) else None
+        gaps, modes = self._gap_rows, self._mode_rows
+        d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) else None
         if float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol:
             return True
         if d0 is None:
             return False
-        # a contact gap that changes sign (the contact closing or opening) is a switch however
-        # small the change: otherwise the step that crosses it keeps the old contact state
-        d1 = np.array(self.sd.GetDataCoordinates())[gaps]
-        return bool(np.any(d0 * d1 < 0.0))
+        # a contact gap that changes sign (the contact closing or opening), or a mode whose sign
+        # changes (a limit stop reached or left, stick <-> slip), is a switch however small the
+        # force error: otherwise the step that crosses it keeps the old state to its end
+        d1 = np.array(self.sd.GetDataCoordinates())
+        return bool(np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes])))
 
     def discontinuous_state(self):
-        return np.array(self.sd.GetDataCoordinates())
+        """The data coordinates at a step's start (read once per step, before its first
+        attempt), also made Exudyn's StartOfStep data as its own step loop does: PostNewton
+        reads them (the slip force a friction sticks again with)."""
+        d = self.sd.GetDataCoordinates()
+        self.sd.SetDataCoordinates(d, self.engine.exu.ConfigurationType.StartOfStep)
+        return np.array(d)
 
     def set_discontinuous_state(self, d):
         self.sd.SetDataCoordinates(d)

@@ -220,8 +220,15 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     rows = _OutputRows(sim, t1, lambda: solver.it.currentStepSize)
     t_last = t1 - 1e-12 * max(1.0, abs(t1))
 
+    # the data coordinates (contact and friction states) as the bridge's steps left them:
+    # Exudyn's loop runs its own PostNewton on the output state after each of its steps,
+    # which may lie before the bridge's last step and undo a switch the bridge has passed
+    data = [np.array(sd.GetDataCoordinates())] if sd.DataSize() else None
+
     def newton(solver, mbs_, settings):
         t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h
+        if data is not None:
+            sd.SetDataCoordinates(data[0])
         try:
             if prestep:              # the model may have changed: no stage carried over
                 if model.rows_changed(sim.q, sim.V, sim.t):     # connectors switched on/off
@@ -249,6 +256,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             # Lagrange multipliers (joint force sensors) of that state where outputs read them,
             # and for the final state
             last = t_out >= t_last
+            if data is not None:
+                data[0] = np.array(sd.GetDataCoordinates())
             model.write_outputs(q_out, V_out, t_out, accelerations or last, multipliers or last)
         except _events.Terminal as stop:       # the state is at the event: Exudyn's run ends there
             stopped.append(stop.message)
