@@ -82,29 +82,42 @@ def free_flyer_robots():
     return sorted(n for n, cls in _loaders().ROBOTS.items() if getattr(cls, "free_flyer", False))
 
 
-def check_robot(name):
-    """InputError unless ``name`` is a free-flyer robot of the installed loaders (nothing is loaded)."""
+def floated(name):
+    """True when robot ``name``'s loader fixes its base (``load_robot(..., floating=True)``
+    then gives it a free-flyer root)."""
+    return not getattr(_loaders().ROBOTS[name], "free_flyer", False)
+
+
+def check_robot(name, floating=False):
+    """InputError unless ``name`` is a free-flyer robot of the installed loaders, or with
+    ``floating`` any of their robots (nothing is loaded)."""
     robots = _loaders().ROBOTS
     if name not in robots:
         raise InputError(f"bench pinocchio_robot: unknown robot {name!r}; example_robot_data's free-flyer "
                          f"robots: {', '.join(free_flyer_robots())}.")
-    if not getattr(robots[name], "free_flyer", False):
+    if not floating and not getattr(robots[name], "free_flyer", False):
         raise InputError(f"bench pinocchio_robot: robot {name!r} has a fixed base (its loader builds no "
                          f"free-flyer root joint); use a free-flyer robot: {', '.join(free_flyer_robots())}.")
 
 
 @functools.lru_cache(maxsize=None)
-def load_robot(name, continuous=False):
+def load_robot(name, continuous=False, floating=False):
     """(pin.Model, q0) of robot ``name`` as ``example_robot_data.load(name)`` gives them
     (q0: the loader's reference configuration), loaded once per process; the model is shared,
     not to be modified. ``continuous``: also robots with continuous joints (q = (cos θ, sin θ);
-    the free-fall scenario's loops renormalize them); the PD controller needs nq = nv."""
-    check_robot(name)
+    the free-fall scenario's loops renormalize them); the PD controller needs nq = nv.
+    ``floating``: a robot whose loader fixes its base (a mobile manipulator such as tiago) is
+    built with a free-flyer root, by the loader's own ``free_flyer`` switch."""
+    check_robot(name, floating)
     import example_robot_data as erd
+    cls = _loaders().ROBOTS[name]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            robot = erd.load(name)
+            if getattr(cls, "free_flyer", False):
+                robot = erd.load(name)
+            else:
+                robot = type(cls.__name__, (cls,), {"free_flyer": True})().robot
     except Exception as exc:            # the loader's own failure (a version check, a missing file)
         raise InputError(f"bench pinocchio_robot: example_robot_data.load({name!r}) failed: "
                          f"{type(exc).__name__}: {' '.join(str(exc).split())}") from None
@@ -123,10 +136,11 @@ def load_robot(name, continuous=False):
     return m, np.array(robot.q0, float)
 
 
-def robot_state(name):
+def robot_state(name, floating=False):
     """(pin.Model, q0, v0) of the robot scenes: the loader's q0, v0 = BASE_TWIST on the
-    root and JOINT_SPEED·N(0, 1) (seed JOINT_SEED) on the joints."""
-    m, q0 = load_robot(name, continuous=True)
+    root and JOINT_SPEED·N(0, 1) (seed JOINT_SEED) on the joints (``floating``: as
+    :func:`load_robot`)."""
+    m, q0 = load_robot(name, continuous=True, floating=floating)
     rng = np.random.default_rng(JOINT_SEED)
     v0 = np.concatenate([BASE_TWIST, JOINT_SPEED * rng.normal(size=m.nv - 6)])
     return m, q0.copy(), v0

@@ -161,6 +161,24 @@ def test_robot_scene_loads_the_loaders_q0_and_pd_holds_it():
     assert np.all(kp == pb.KP) and np.all(kd > 0)
 
 
+def test_a_fixed_base_robot_floated_as_its_loader_allows():
+    """tiago's loader fixes its base: refused unless floated, then built by the loader itself
+    with a free-flyer root (its other joints as loaded) and tumbling like any free robot:
+    the bridge's dop853 matches scipy DOP853 on Pinocchio's (q, v) (both at 1e-10)."""
+    pytest.importorskip("example_robot_data", reason=NEEDS_LOADERS)
+    with pytest.raises(InputError, match="fixed base"):
+        pb.robot_state("tiago")
+    assert pb.floated("tiago") and not pb.floated("solo12")
+    fixed = pb._loaders().ROBOTS["tiago"]().robot.model
+    m, q0, v0 = pb.robot_state("tiago", floating=True)
+    assert m.joints[1].shortname() == "JointModelFreeFlyer" and m.nv == fixed.nv + 6
+    assert [j.shortname() for j in m.joints][2:] == [j.shortname() for j in fixed.joints][1:]
+    pm = PinocchioModel(m, q0=q0, v0=v0)
+    r = simulate(pm, (0, 0.3), method="dop853", rtol=1e-10, atol=1e-10, t_eval=[0.3])
+    q_ref, _ = bl.dop853_renorm(m, q0, v0, 0.3, 1e-10)
+    assert r.success and bench.pose_error(pm, r.q[-1], q_ref) < 1e-7
+
+
 def test_tiny_bench_run_on_a_real_robot(tmp_path):
     pytest.importorskip("example_robot_data", reason=NEEDS_LOADERS)
     # free fall through the command line, the user loops included
