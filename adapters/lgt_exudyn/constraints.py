@@ -163,7 +163,9 @@ class ConstraintRows:
         self.ae_keep, vel = keep[ind], vel[ind]
         self.n = len(self.ae_keep)
         self.nonholonomic = tuple(int(k) for k in np.flatnonzero(vel))
-        self.time_dependent = self._detect_time_dependence(q0, t0)
+        # every row set aside (e.g. a user-written Euler-parameter norm, which the bridge's
+        # rotation coordinates keep by construction): nothing left to depend on time
+        self.time_dependent = self._detect_time_dependence(q0, t0) if self.n else False
         self.detect_velocity_offset(q0, t0)
         E.write(q0, qd0, t0)
         if self.redundant_rows:
@@ -175,7 +177,7 @@ class ConstraintRows:
                 f"constraint equations are redundant at the initial state (algebraic equations "
                 f"{self.redundant_rows}: {E.ae_owners(self.redundant_rows)}); lgt_bridge sets them "
                 "aside and enforces the others (the motion is the same; their Lagrange multipliers "
-                "are not unique)."), stacklevel=4)
+                "are not unique)."), stacklevel=5)
 
     def detect_velocity_offset(self, q, t):
         """Set ``velocity_offset``: a velocity-level row's residual at rest is not zero at

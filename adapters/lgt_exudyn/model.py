@@ -8,9 +8,8 @@ mapped to twist coordinates through q̇_e = H(q) V:
 
     M̄ = Hᵀ M H,   Q̄ = Hᵀ (Q - M Ḣ V),   A = C_q H,   γ = d/dt(A V)|_V
 
-with the constraint rows and γ from :mod:`lgt_exudyn.constraints`. This module composes those parts
-into the ``Model`` protocol; the compiled backend runs f through :mod:`.kernels`.
-"""
+with the constraint rows and γ from :mod:`lgt_exudyn.constraints`, composed into the ``Model``
+protocol here; the compiled backend runs f through :mod:`.kernels`."""
 import numpy as np
 
 from lgt_bridge.errors import InputError
@@ -18,7 +17,7 @@ from lgt_bridge.model import Model, combine_iteration, solve_kkt
 
 from . import constraints as _constraints
 from .constraints import ConstraintRows
-from .engine import Engine, engine_call, engine_error
+from .engine import Engine, engine_call, engine_error, engine_set_up
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
 from .ode1 import ODE1States
@@ -62,6 +61,7 @@ class ExudynModel(StepHooks, Model):
     lgt_exudyn.SolveDynamic : the drop-in for ``mbs.SolveDynamic`` built on this model.
     """
 
+    @engine_set_up
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend
         if not getattr(mbs, "systemIsConsistent", False):
