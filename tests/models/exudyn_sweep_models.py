@@ -12,7 +12,10 @@ assembled.
   constraint Jacobian, before the first step;
 - a rigid body written as an ObjectGenericODE2 with Euler-parameter coordinates and mass and
   force user functions, its Euler-parameter norm a user-written CoordinateVectorConstraint
-  (Exudyn's rigidBodyAsUserFunctionTest.py), next to the same body as an ObjectRigidBody.
+  (Exudyn's rigidBodyAsUserFunctionTest.py), next to the same body as an ObjectRigidBody;
+- a double pendulum of two mass points in one ObjectGenericODE2 whose two length constraints
+  are a CoordinateVectorConstraint's user functions, the constraint function ignoring its
+  ``velocityLevel`` argument (Exudyn's coordinateVectorConstraintGenericODE2.py).
 """
 import numpy as np
 
@@ -21,8 +24,9 @@ from exudyn.rigidBodyUtilities import (AngularVelocity2EulerParameters_t, EulerP
                                        Inertia6D2InertiaTensor, Skew, eulerParameters0)
 from exudyn.utilities import (CoordinateConstraint, CoordinateSpringDamper, CoordinateVectorConstraint,
                               Gravity, MarkerBodyMass, MarkerNodeCoordinate, MarkerNodeCoordinates,
-                              MassPoint, NodePoint, NodePointGround, NodeRigidBodyEP, ObjectGenericODE2,
-                              ObjectRigidBody, SensorNode)
+                              MarkerNodePosition, MarkerObjectODE2Coordinates, MassPoint, NodePoint,
+                              NodePoint2D, NodePointGround, NodeRigidBodyEP, ObjectGenericODE2,
+                              ObjectRigidBody, SensorNode, Force)
 
 from exudyn_special_models import _system, settings  # the shared system and settings
 
@@ -142,3 +146,48 @@ def rigid_body_as_user_function(t_end=0.05, n=50):
         quadraticTermMarker1=np.array([[0, 0, 0, 1, 1, 1, 1]]), offset=[1]))
     mbs.Assemble()
     return mbs, settings(t_end, n), n_rb, n_uf
+
+
+def pendulum_by_constraint_user_function(velocity_aware=False, velocity_row=False, t_end=0.5, n=500):
+    """A double pendulum (links L = 0.8, masses 2.5 under gravity) of two NodePoint2D in one
+    ObjectGenericODE2, its constraints |p0| = L and |p1 - p0| = L as a
+    CoordinateVectorConstraint's constraint and Jacobian user functions. As Exudyn's test
+    model writes it, the constraint function returns g whatever ``velocityLevel`` asks;
+    ``velocity_aware``: it returns C_q q_t when velocityLevel is True. ``velocity_row``: the
+    model also has a velocity-level CoordinateConstraint (a node held at rest in z, no
+    effect on the motion). Returns (mbs, settings, node of the tip)."""
+    mbs = _system()
+    L, mass, g = 0.8, 2.5, 9.81
+    n0 = mbs.AddNode(NodePoint2D(referenceCoordinates=[L, 0]))
+    n1 = mbs.AddNode(NodePoint2D(referenceCoordinates=[2 * L, 0]))
+    body = mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n0, n1], massMatrix=mass * np.eye(4)))
+    for node in (n0, n1):
+        mbs.AddLoad(Force(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=node)),
+                          loadVector=[0, -mass * g, 0]))
+
+    def jacobian(mbs, t, itemNumber, q, q_t, velocityLevel):
+        J = np.zeros((2, 4))
+        J[0, 0:2] = np.array(q[0:2]) / np.linalg.norm(q[0:2])
+        d = np.array(q[2:4]) - np.array(q[0:2])
+        J[1, 0:2], J[1, 2:4] = -d / np.linalg.norm(d), d / np.linalg.norm(d)
+        return J
+
+    def constraint(mbs, t, itemNumber, q, q_t, velocityLevel):
+        if velocityLevel and velocity_aware:
+            return list(jacobian(mbs, t, itemNumber, q, q_t, True) @ np.array(q_t))
+        return [np.sqrt(q[0] ** 2 + q[1] ** 2) - L, np.sqrt((q[2] - q[0]) ** 2 + (q[3] - q[1]) ** 2) - L]
+
+    ground = mbs.AddNode(NodePointGround())
+    mbs.AddObject(CoordinateVectorConstraint(
+        markerNumbers=[mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=ground)),
+                       mbs.AddMarker(MarkerObjectODE2Coordinates(objectNumber=body))],
+        scalingMarker0=np.zeros((2, 4)), constraintUserFunction=constraint, jacobianUserFunction=jacobian))
+    if velocity_row:
+        n2 = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0]))
+        mbs.AddObject(MassPoint(mass=1.0, nodeNumber=n2))
+        mbs.AddObject(CoordinateConstraint(
+            markerNumbers=[mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0)),
+                           mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n2, coordinate=2))],
+            velocityLevel=True))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), n1
