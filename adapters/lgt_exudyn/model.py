@@ -437,9 +437,9 @@ class ExudynModel(StepHooks, Model):
 
     @engine_call
     def check_mass_matrix(self, q):
-        """InputError when the twist mass matrix at q is singular or indefinite (as
-        ``simulate`` checks every model before the first step; the ODE2 part's: the ODE1
-        block is the identity); a constant positive definite M̄ is checked once, by the
+        """InputError when the twist mass matrix at q is singular or indefinite, even on motions the
+        constraints fix (the solves invert M̄; ``simulate`` checks before the first step; the ODE2
+        part's: the ODE1 block is the identity); a constant positive definite M̄ is checked once, by the
         Cholesky factors of its diagonal blocks, for all later runs."""
         from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self.Mbar is not None:
@@ -457,7 +457,7 @@ class ExudynModel(StepHooks, Model):
         q2 = q[:self.n2]
         M = self._mass2(q2)
         A = self._jacobian2(q2) if self.n_constraints else None
-        d = mass_defects(M, A)
+        d = mass_defects(M, A) or (mass_defects(M) if A is not None else [])   # M̄⁻¹ is formed
         if d:
             raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
                              + " Exudyn's implicit solvers (generalized-α) can run such a model, since "

@@ -15,7 +15,10 @@ assembled.
   (Exudyn's rigidBodyAsUserFunctionTest.py), next to the same body as an ObjectRigidBody;
 - a double pendulum of two mass points in one ObjectGenericODE2 whose two length constraints
   are a CoordinateVectorConstraint's user functions, the constraint function ignoring its
-  ``velocityLevel`` argument (Exudyn's coordinateVectorConstraintGenericODE2.py).
+  ``velocityLevel`` argument (Exudyn's coordinateVectorConstraintGenericODE2.py);
+- an ALE cable (ObjectALEANCFCable2D elements sharing one ALE coordinate) whose ALE coordinate
+  a CoordinateConstraint holds (Exudyn's ANCFmovingRigidBodyTest.py): its mass matrix is
+  singular, positive definite only on the motions the constraints allow.
 """
 import numpy as np
 
@@ -191,3 +194,27 @@ def pendulum_by_constraint_user_function(velocity_aware=False, velocity_row=Fals
             velocityLevel=True))
     mbs.Assemble()
     return mbs, settings(t_end, n), n1
+
+
+def ale_cable_held(n_elements=4, t_end=0.05, n=50):
+    """A straight ALE cable under gravity, 10 m, ends pinned with fixed slopes
+    (GenerateStraightLineANCFCable2D with an ALECable2D template on one NodeGenericODE2 ALE
+    coordinate), the ALE coordinate held by a CoordinateConstraint to ground. Returns (mbs,
+    settings, ALE node)."""
+    from exudyn.beams import GenerateStraightLineANCFCable2D
+    from exudyn.utilities import ALECable2D, NodeGenericODE2
+    mbs = _system()
+    ale = mbs.AddNode(NodeGenericODE2(numberOfODE2Coordinates=1, referenceCoordinates=[0],
+                                      initialCoordinates=[0], initialCoordinates_t=[0]))
+    cable = ALECable2D(physicsMassPerLength=6.96, physicsBendingStiffness=595.6, physicsAxialStiffness=9.67e6)
+    cable.nodeNumbers[2] = ale
+    GenerateStraightLineANCFCable2D(mbs, positionOfNode0=[0, 0, 0], positionOfNode1=[10, 0, 0],
+                                    numberOfElements=n_elements, cableTemplate=cable,
+                                    massProportionalLoad=[0, -9.81, 0],
+                                    fixedConstraintsNode0=[1, 1, 0, 1], fixedConstraintsNode1=[1, 1, 0, 1])
+    ground = mbs.AddNode(NodePointGround())
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ale, coordinate=0))]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), ale
