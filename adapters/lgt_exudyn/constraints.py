@@ -163,7 +163,11 @@ class ConstraintRows:
         self.ae_keep, vel = keep[ind], vel[ind]
         self.n = len(self.ae_keep)
         self.nonholonomic = tuple(int(k) for k in np.flatnonzero(vel))
-        self.time_dependent = self._detect_time_dependence(q0, t0)
+        if self.velocity_level and self.n:
+            self._check_velocity_level(q0, qd0, t0, Cp)
+        # every row set aside (e.g. a user-written Euler-parameter norm, which the bridge's
+        # rotation coordinates keep by construction): nothing left to depend on time
+        self.time_dependent = self._detect_time_dependence(q0, t0) if self.n else False
         self.detect_velocity_offset(q0, t0)
         E.write(q0, qd0, t0)
         if self.redundant_rows:
@@ -175,7 +179,46 @@ class ConstraintRows:
                 f"constraint equations are redundant at the initial state (algebraic equations "
                 f"{self.redundant_rows}: {E.ae_owners(self.redundant_rows)}); lgt_bridge sets them "
                 "aside and enforces the others (the motion is the same; their Lagrange multipliers "
-                "are not unique)."), stacklevel=4)
+                "are not unique)."), stacklevel=5)
+
+    def _check_velocity_level(self, q0, qd0, t0, Cp):
+        """Exudyn's velocity-level residual of a position-level row of a constraint user function
+        must be C_q q̇ (+ ∂g/∂t): a user function that ignores its ``velocityLevel`` argument
+        returns g there (Exudyn's own index-3 solvers never ask for it). Such rows make A V and γ come
+        from the Jacobian instead (``velocity_level`` False), with a note; with velocity-level
+        rows in the model as well, which need Exudyn's velocity-level residual, an InputError."""
+        E = self.engine
+        user = set()                    # AE rows of objects with a constraint user function
+        for k in range(E.sd.NumberOfObjects()):
+            if E.mbs.GetObject(k).get("constraintUserFunction", 0) not in (0, None):
+                user.update(int(i) for i in E.sd.GetObjectLTGAE(k))
+        pos = np.array([k for k in self.holonomic_rows if int(self.ae_keep[k]) in user], int)
+        if not len(pos):
+            return
+        rows = self.ae_keep[pos]
+        qd = 1.0 + 0.37 * np.sin(np.arange(self.nodes.n2) + 1.0)     # a generic test velocity
+        r0 = self.residual(q0, np.zeros(self.nodes.n2), t0, True)[pos]
+        r1 = self.residual(q0, qd, t0, True)[pos]
+        E.write(q0, qd0, t0)
+        want = Cp[rows] @ qd
+        bad = np.abs(r1 - r0 - want) > 1e-6 * (1.0 + np.abs(want) + np.abs(r1 - r0))
+        if not bad.any():
+            return
+        owners = E.ae_owners([int(i) for i in rows[bad]])
+        if self.nonholonomic:
+            raise InputError(f"Exudyn model: the velocity-level constraint equations of {owners} are not "
+                             "C_q q_t (a constraint user function that ignores its velocityLevel "
+                             "argument?), and the model has velocity-level constraints, for which lgt_bridge "
+                             "needs Exudyn's velocity-level equations; return the time derivative of the "
+                             "constraint when velocityLevel is True.")
+        import warnings
+
+        from lgt_bridge.errors import ModelNote
+        self.velocity_level = False
+        warnings.warn(ModelNote(
+            f"Exudyn model: the velocity-level constraint equations of {owners} are not C_q q_t (a "
+            "constraint user function that ignores its velocityLevel argument?); lgt_bridge takes the "
+            "constraints' velocity form from their Jacobian instead."), stacklevel=6)
 
     def detect_velocity_offset(self, q, t):
         """Set ``velocity_offset``: a velocity-level row's residual at rest is not zero at

@@ -1,6 +1,7 @@
 """Exudyn access of :class:`lgt_exudyn.ExudynModel`: the evaluator (Exudyn's implicit solver
 object set up to write no files and no sensors), state writes, the algebraic equations'
 residual and Jacobian, and Exudyn's exceptions turned into ModelErrors."""
+import contextlib
 import functools
 import re
 
@@ -37,21 +38,38 @@ def engine_error(sd, what, exc):
                       "fix it (run the script with Exudyn's own solver to see it in context).")
 
 
+@contextlib.contextmanager
+def engine_errors(sd, what):
+    """Within: an exception Exudyn raises becomes the ModelError of :func:`engine_error`
+    (the original chained: ``--debug`` shows it); the bridge's own errors and bugs pass."""
+    try:
+        yield
+    except LGTError:
+        raise
+    except Exception as exc:
+        err = engine_error(sd, what, exc)
+        if err is None:
+            raise
+        raise err from exc
+
+
 def engine_call(method):
     """Turn an exception Exudyn raises inside ``method`` (of an object with ``sd``) into a
-    ModelError naming the time and Exudyn's message (:func:`engine_error`); the original
-    stays chained (``--debug`` shows it)."""
+    ModelError naming the time and Exudyn's message (:func:`engine_errors`)."""
     @functools.wraps(method)
     def call(self, *args, **kwargs):
-        try:
+        with engine_errors(self.sd, method.__name__):
             return method(self, *args, **kwargs)
-        except LGTError:
-            raise
-        except Exception as exc:
-            err = engine_error(self.sd, method.__name__, exc)
-            if err is None:
-                raise
-            raise err from exc
+    return call
+
+
+def engine_set_up(init):
+    """``init(self, mbs, ...)`` reading a model: a user function Exudyn calls meanwhile (a
+    constraint's offset user function in the Jacobian, ...) that fails is a ModelError."""
+    @functools.wraps(init)
+    def call(self, mbs, *args, **kwargs):
+        with engine_errors(mbs.systemData, "set-up"):
+            return init(self, mbs, *args, **kwargs)
     return call
 
 

@@ -8,9 +8,8 @@ mapped to twist coordinates through q̇_e = H(q) V:
 
     M̄ = Hᵀ M H,   Q̄ = Hᵀ (Q - M Ḣ V),   A = C_q H,   γ = d/dt(A V)|_V
 
-with the constraint rows and γ from :mod:`lgt_exudyn.constraints`. This module composes those parts
-into the ``Model`` protocol; the compiled backend runs f through :mod:`.kernels`.
-"""
+with the constraint rows and γ from :mod:`lgt_exudyn.constraints`, composed into the ``Model``
+protocol here; the compiled backend runs f through :mod:`.kernels`."""
 import numpy as np
 
 from lgt_bridge.errors import InputError
@@ -18,7 +17,7 @@ from lgt_bridge.model import Model, combine_iteration, solve_kkt
 
 from . import constraints as _constraints
 from .constraints import ConstraintRows
-from .engine import Engine, engine_call, engine_error
+from .engine import Engine, engine_call, engine_error, engine_set_up
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, has_prestep
 from .ode1 import ODE1States
@@ -62,6 +61,7 @@ class ExudynModel(StepHooks, Model):
     lgt_exudyn.SolveDynamic : the drop-in for ``mbs.SolveDynamic`` built on this model.
     """
 
+    @engine_set_up
     def __init__(self, mbs, simulationSettings=None, backend=None):
         from lgt_bridge import backend as _backend
         if not getattr(mbs, "systemIsConsistent", False):
@@ -437,9 +437,9 @@ class ExudynModel(StepHooks, Model):
 
     @engine_call
     def check_mass_matrix(self, q):
-        """InputError when the twist mass matrix at q is singular or indefinite (as
-        ``simulate`` checks every model before the first step; the ODE2 part's: the ODE1
-        block is the identity); a constant positive definite M̄ is checked once, by the
+        """InputError when the twist mass matrix at q is singular or indefinite, even on motions the
+        constraints fix (the solves invert M̄; ``simulate`` checks before the first step; the ODE2
+        part's: the ODE1 block is the identity); a constant positive definite M̄ is checked once, by the
         Cholesky factors of its diagonal blocks, for all later runs."""
         from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
         if self.Mbar is not None:
@@ -457,7 +457,7 @@ class ExudynModel(StepHooks, Model):
         q2 = q[:self.n2]
         M = self._mass2(q2)
         A = self._jacobian2(q2) if self.n_constraints else None
-        d = mass_defects(M, A)
+        d = mass_defects(M, A) or (mass_defects(M) if A is not None else [])   # M̄⁻¹ is formed
         if d:
             raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
                              + " Exudyn's implicit solvers (generalized-α) can run such a model, since "

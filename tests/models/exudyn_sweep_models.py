@@ -6,11 +6,30 @@ assembled.
 - a spring-damper whose user function has the signature of an older Exudyn (no
   ``itemIndex`` argument): Exudyn raises when it calls it, before the first step
   (Exudyn's connectorRigidBodySpringDamperTest.py of an older version);
-- a pre-step user function that raises in the middle of the run.
+- a pre-step user function that raises in the middle of the run;
+- a coordinate constraint driven by an offset user function (Exudyn's MiniExample
+  ObjectConnectorCoordinate.py): one of an older signature raises while the bridge reads the
+  constraint Jacobian, before the first step;
+- a rigid body written as an ObjectGenericODE2 with Euler-parameter coordinates and mass and
+  force user functions, its Euler-parameter norm a user-written CoordinateVectorConstraint
+  (Exudyn's rigidBodyAsUserFunctionTest.py), next to the same body as an ObjectRigidBody;
+- a double pendulum of two mass points in one ObjectGenericODE2 whose two length constraints
+  are a CoordinateVectorConstraint's user functions, the constraint function ignoring its
+  ``velocityLevel`` argument (Exudyn's coordinateVectorConstraintGenericODE2.py);
+- an ALE cable (ObjectALEANCFCable2D elements sharing one ALE coordinate) whose ALE coordinate
+  a CoordinateConstraint holds (Exudyn's ANCFmovingRigidBodyTest.py): its mass matrix is
+  singular, positive definite only on the motions the constraints allow.
 """
+import numpy as np
+
 import exudyn as exu
-from exudyn.utilities import (CoordinateSpringDamper, MarkerNodeCoordinate, MassPoint, NodePoint,
-                              NodePointGround, SensorNode)
+from exudyn.rigidBodyUtilities import (AngularVelocity2EulerParameters_t, EulerParameters2GLocal,
+                                       Inertia6D2InertiaTensor, Skew, eulerParameters0)
+from exudyn.utilities import (CoordinateConstraint, CoordinateSpringDamper, CoordinateVectorConstraint,
+                              Gravity, MarkerBodyMass, MarkerNodeCoordinate, MarkerNodeCoordinates,
+                              MarkerNodePosition, MarkerObjectODE2Coordinates, MassPoint, NodePoint,
+                              NodePoint2D, NodePointGround, NodeRigidBodyEP, ObjectGenericODE2,
+                              ObjectRigidBody, SensorNode, Force)
 
 from exudyn_special_models import _system, settings  # the shared system and settings
 
@@ -58,3 +77,144 @@ def prestep_raising_at(t_fail=0.05, t_end=0.1, n=10):
     mbs.SetPreStepUserFunction(prestep)
     mbs.Assemble()
     return mbs, settings(t_end, n)
+
+
+def driven_coordinate(old_signature=False, t_end=1.0, n=100):
+    """A mass point whose x coordinate follows x_ref + offset(t), offset(t) =
+    0.05 (1 - cos(π t / 2)), prescribed by a CoordinateConstraint's offset user function;
+    ``old_signature``: the function as written for an older Exudyn (no ``itemNumber``), so
+    every call raises. Returns (mbs, settings, node)."""
+    mbs = _system()
+    ground = mbs.AddNode(NodePointGround())
+    node = mbs.AddNode(NodePoint(referenceCoordinates=[2.0, 0, 0]))
+    mbs.AddObject(MassPoint(mass=5.0, nodeNumber=node))
+    m0 = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    m1 = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+
+    def offset_old(mbs, t, lOffset):                 # the MiniExample's, no itemNumber
+        return 0.5 * (1 - np.cos(2 * np.pi * 0.25 * t)) * lOffset
+
+    def offset(mbs, t, itemNumber, lOffset):
+        return offset_old(mbs, t, lOffset)
+
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[m0, m1], offset=0.1,
+                                       offsetUserFunction=offset_old if old_signature else offset))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), node
+
+
+def rigid_body_as_user_function(t_end=0.05, n=50):
+    """A spinning rigid body under gravity twice: as an ObjectRigidBody (Euler parameters)
+    and as an ObjectGenericODE2 on a NodeRigidBodyEP without its own Euler-parameter
+    constraint, the equations of motion in user functions (M = diag(m, m, m, Gᵀ J G),
+    f = m g - Gᵀ ω̃ J ω) and the norm q·q = 1 as a CoordinateVectorConstraint with a
+    quadratic term, as Exudyn's rigidBodyAsUserFunctionTest.py writes it. Returns (mbs,
+    settings, node of the ObjectRigidBody, node of the user-function body)."""
+    mbs = _system()
+    mass, inertia6D, g = 2.0, [6, 1, 6, 0, 1, 0], 9.81
+    omega0, v0 = [0, 50.0, 20], [0.2, 0.0, 0.0]
+    ep_t0 = list(AngularVelocity2EulerParameters_t(omega0, eulerParameters0))
+    n_rb = mbs.AddNode(NodeRigidBodyEP(referenceCoordinates=[0.5, 0, 0] + eulerParameters0,
+                                       initialVelocities=v0 + ep_t0))
+    o_rb = mbs.AddObject(ObjectRigidBody(mass=mass, inertia=inertia6D, nodeNumber=n_rb))
+    mbs.AddLoad(Gravity(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=o_rb)), loadVector=[0, -g, 0]))
+
+    q_ref = np.array([0.0, 0, 0] + eulerParameters0)
+    n_uf = mbs.AddNode(NodeRigidBodyEP(referenceCoordinates=q_ref, initialVelocities=v0 + ep_t0,
+                                       addConstraintEquation=False))
+    J = Inertia6D2InertiaTensor(inertia6D)
+    f_g = np.array([0, -g * mass, 0] + [0] * 4)
+
+    def force(mbs, t, itemIndex, q, q_t):
+        G = EulerParameters2GLocal((np.array(q) + q_ref)[3:7])
+        omega = G @ np.array(q_t)[3:7]
+        f = f_g.copy()
+        f[3:7] -= G.T @ Skew(omega) @ J @ omega
+        return f
+
+    def mass_matrix(mbs, t, itemIndex, q, q_t):
+        G = EulerParameters2GLocal((np.array(q) + q_ref)[3:7])
+        M = np.zeros((7, 7))
+        M[0:3, 0:3] = mass * np.eye(3)
+        M[3:7, 3:7] = G.T @ J @ G
+        return M
+
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n_uf], forceUserFunction=force,
+                                    massMatrixUserFunction=mass_matrix))
+    ground = mbs.AddNode(NodePointGround())
+    mbs.AddObject(CoordinateVectorConstraint(
+        markerNumbers=[mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=ground)),
+                       mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=n_uf))],
+        scalingMarker0=[], scalingMarker1=[], quadraticTermMarker0=[],
+        quadraticTermMarker1=np.array([[0, 0, 0, 1, 1, 1, 1]]), offset=[1]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), n_rb, n_uf
+
+
+def pendulum_by_constraint_user_function(velocity_aware=False, velocity_row=False, t_end=0.5, n=500):
+    """A double pendulum (links L = 0.8, masses 2.5 under gravity) of two NodePoint2D in one
+    ObjectGenericODE2, its constraints |p0| = L and |p1 - p0| = L as a
+    CoordinateVectorConstraint's constraint and Jacobian user functions. As Exudyn's test
+    model writes it, the constraint function returns g whatever ``velocityLevel`` asks;
+    ``velocity_aware``: it returns C_q q_t when velocityLevel is True. ``velocity_row``: the
+    model also has a velocity-level CoordinateConstraint (a node held at rest in z, no
+    effect on the motion). Returns (mbs, settings, node of the tip)."""
+    mbs = _system()
+    L, mass, g = 0.8, 2.5, 9.81
+    n0 = mbs.AddNode(NodePoint2D(referenceCoordinates=[L, 0]))
+    n1 = mbs.AddNode(NodePoint2D(referenceCoordinates=[2 * L, 0]))
+    body = mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n0, n1], massMatrix=mass * np.eye(4)))
+    for node in (n0, n1):
+        mbs.AddLoad(Force(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=node)),
+                          loadVector=[0, -mass * g, 0]))
+
+    def jacobian(mbs, t, itemNumber, q, q_t, velocityLevel):
+        J = np.zeros((2, 4))
+        J[0, 0:2] = np.array(q[0:2]) / np.linalg.norm(q[0:2])
+        d = np.array(q[2:4]) - np.array(q[0:2])
+        J[1, 0:2], J[1, 2:4] = -d / np.linalg.norm(d), d / np.linalg.norm(d)
+        return J
+
+    def constraint(mbs, t, itemNumber, q, q_t, velocityLevel):
+        if velocityLevel and velocity_aware:
+            return list(jacobian(mbs, t, itemNumber, q, q_t, True) @ np.array(q_t))
+        return [np.sqrt(q[0] ** 2 + q[1] ** 2) - L, np.sqrt((q[2] - q[0]) ** 2 + (q[3] - q[1]) ** 2) - L]
+
+    ground = mbs.AddNode(NodePointGround())
+    mbs.AddObject(CoordinateVectorConstraint(
+        markerNumbers=[mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=ground)),
+                       mbs.AddMarker(MarkerObjectODE2Coordinates(objectNumber=body))],
+        scalingMarker0=np.zeros((2, 4)), constraintUserFunction=constraint, jacobianUserFunction=jacobian))
+    if velocity_row:
+        n2 = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0]))
+        mbs.AddObject(MassPoint(mass=1.0, nodeNumber=n2))
+        mbs.AddObject(CoordinateConstraint(
+            markerNumbers=[mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0)),
+                           mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n2, coordinate=2))],
+            velocityLevel=True))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), n1
+
+
+def ale_cable_held(n_elements=4, t_end=0.05, n=50):
+    """A straight ALE cable under gravity, 10 m, ends pinned with fixed slopes
+    (GenerateStraightLineANCFCable2D with an ALECable2D template on one NodeGenericODE2 ALE
+    coordinate), the ALE coordinate held by a CoordinateConstraint to ground. Returns (mbs,
+    settings, ALE node)."""
+    from exudyn.beams import GenerateStraightLineANCFCable2D
+    from exudyn.utilities import ALECable2D, NodeGenericODE2
+    mbs = _system()
+    ale = mbs.AddNode(NodeGenericODE2(numberOfODE2Coordinates=1, referenceCoordinates=[0],
+                                      initialCoordinates=[0], initialCoordinates_t=[0]))
+    cable = ALECable2D(physicsMassPerLength=6.96, physicsBendingStiffness=595.6, physicsAxialStiffness=9.67e6)
+    cable.nodeNumbers[2] = ale
+    GenerateStraightLineANCFCable2D(mbs, positionOfNode0=[0, 0, 0], positionOfNode1=[10, 0, 0],
+                                    numberOfElements=n_elements, cableTemplate=cable,
+                                    massProportionalLoad=[0, -9.81, 0],
+                                    fixedConstraintsNode0=[1, 1, 0, 1], fixedConstraintsNode1=[1, 1, 0, 1])
+    ground = mbs.AddNode(NodePointGround())
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ale, coordinate=0))]))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), ale
