@@ -254,7 +254,7 @@ class Simulation:
             elif post is None:
                 accepted, h_new = st.attempt(self.t, h_try)
             else:
-                accepted, h_new = self._attempt_discontinuous(h_try, post)
+                accepted, h_new = _switches.attempt_discontinuous(self, h_try, post)
         except ModelError as exc:           # the engine raised: end the run, keep the steps
             raise StepFailed(str(exc), error=ModelError) from exc
         if accepted:
@@ -296,28 +296,6 @@ class Simulation:
 
     def _max_steps_message(self):
         return _diagnosis.max_steps_message(self)
-
-    def _attempt_discontinuous(self, h, post):
-        """A step of a model with discontinuous states (contact, friction: the model's
-        ``post_step(q, V, t)`` updates them from the step's end state and says whether they
-        changed). A step over which they change is declined and retried at a quarter of its
-        length, from its start and with the states of its start, until it is no longer than
-        ``h_event``; that short step is then redone with the new states (as Exudyn's
-        discontinuous iteration redoes its Newton step), up to MAX_DISCONTINUOUS times."""
-        st, m = self.stepper, self.model
-        snap, d0 = st.snapshot(), m.discontinuous_state()
-        accepted, h_new = st.attempt(self.t, h)
-        for _ in range(self.MAX_DISCONTINUOUS):
-            if not accepted or not post(st.q, st.V, self.t + h):
-                break
-            st.restore(snap)
-            floor = max(self.h_event, self.min_step)      # (no finer than the run's min_step)
-            if h > floor:
-                m.set_discontinuous_state(d0)
-                return False, max(0.25 * h, floor)
-            self.n_redone += 1
-            accepted, h_new = st.attempt(self.t, h)
-        return accepted, h_new
 
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached, without collecting states.

@@ -1,4 +1,5 @@
-"""Switches of a model's discrete mode, located in time and stepped over.
+"""Switches of a model's discrete mode, located in time and stepped over; and the steps of a
+model with discontinuous states (:func:`attempt_discontinuous`, see its docstring).
 
 Some models carry a discrete mode that their f reads and that the state decides between
 steps: Exudyn's GeneralContact keeps the set of active contact pairs that its PostNewton
@@ -33,6 +34,42 @@ step's end).
 import numpy as np
 
 _EPS = np.finfo(float).eps
+
+#: what a model's ``post_step`` returns when its discontinuous states moved without
+#: switching (an engine's friction direction, a penetration): redo the step with them
+REDO = "redo"
+
+
+def attempt_discontinuous(sim, h, post):
+    """A step of simulation ``sim`` whose model has discontinuous states (contact, friction:
+    its ``post_step(q, V, t)`` updates them from the step's end state and says whether they
+    switched: false, true, or ``REDO``). A step over which they switch is declined and
+    retried at a quarter of its length, from its start and with the states of its start,
+    until it is no longer than ``sim.h_event`` (nor ``sim.min_step``); that short step is
+    then redone with the new states (as Exudyn's discontinuous iteration redoes its Newton
+    step), up to ``sim.MAX_DISCONTINUOUS`` times. ``REDO`` redoes the step at its length at
+    once, as Exudyn iterates; states that still move after MAX_DISCONTINUOUS redos shorten
+    the step as a switch does (Exudyn's ``ignoreMaxIterations = False``). Returns the
+    stepper's (accepted, h_new)."""
+    st, m, t = sim.stepper, sim.model, sim.t
+    snap, d0 = st.snapshot(), m.discontinuous_state()
+    floor = max(sim.h_event, sim.min_step)
+    accepted, h_new = st.attempt(t, h)
+    for k in range(sim.MAX_DISCONTINUOUS + 1):
+        changed = post(st.q, st.V, t + h) if accepted else False
+        if not changed:
+            break
+        last = k == sim.MAX_DISCONTINUOUS          # REDO without settling: shorten the step too
+        if (changed != REDO or last) and h > floor:         # a switch within the step: locate it
+            st.restore(snap)
+            m.set_discontinuous_state(d0)
+            return False, max(0.25 * h, floor)
+        if last:
+            break
+        st.restore(snap)
+        sim.n_redone += 1
+        accepted, h_new = st.attempt(t, h)
+    return accepted, h_new
 
 
 class SwitchLocator:

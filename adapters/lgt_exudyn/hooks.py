@@ -5,9 +5,11 @@ accelerations and Lagrange multipliers for Exudyn's sensors and solution file); 
 system facts they depend on: a pre-step user function, the contact gaps among the data
 coordinates, impact models the bridge refuses. :class:`StepHooks` is a part of
 :class:`~lgt_exudyn.model.ExudynModel`."""
+import warnings
+
 import numpy as np
 
-from lgt_bridge.errors import InputError
+from lgt_bridge.errors import InputError, ModelNote
 
 from . import contact as _contact
 from .constraints import ConstraintRows
@@ -186,22 +188,33 @@ def has_prestep(mbs):
         return False
 
 
-#: contact objects whose data coordinate 0 is the gap (Exudyn's documentation of each)
-GAP_OBJECTS = ("ContactSphereSphere",)
+#: contact objects with the data coordinate that holds their gap (Exudyn's documentation
+#: and PostNewton of each)
+GAP_OBJECTS = {"ContactSphereSphere": 0, "ConnectorRollingDiscPenalty": 2}
+#: objects whose force reads a velocity their PostNewton stored at the last step's end
+LAGGED_OBJECTS = {"ConnectorRollingDiscPenalty": "its friction force acts along the slip velocity stored at the "
+                                                 "last step's end (data coordinates 0, 1)"}
 
 
 def gap_rows(mbs):
-    """Indices, among the system's data coordinates, of the contact gaps (data[0] of the
-    GAP_OBJECTS' data nodes); the other data coordinates (tangential and impact velocities,
-    plastic overlaps) are not switches when they change sign."""
+    """Indices, among the system's data coordinates, of the contact gaps (the GAP_OBJECTS'
+    data); the other data coordinates (tangential and impact velocities, plastic overlaps)
+    are not switches when they change sign. A ModelNote names each LAGGED_OBJECTS object."""
     sd, rows = mbs.systemData, []
     for k in range(sd.NumberOfObjects()):
         o = mbs.GetObject(k)
-        if str(o.get("objectType", "")).removeprefix("Object") in GAP_OBJECTS and "nodeNumber" in o:
+        kind = str(o.get("objectType", "")).removeprefix("Object")
+        if kind in GAP_OBJECTS and "nodeNumber" in o:
             try:
-                rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[0]))
+                rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[GAP_OBJECTS[kind]]))
             except Exception:
                 pass
+        if kind in LAGGED_OBJECTS:
+            warnings.warn(ModelNote(
+                f"Exudyn object {k} {o.get('name', '')!r} (Object{kind}): {LAGGED_OBJECTS[kind]}, so its "
+                "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
+                "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
+                "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
     return np.array(rows, int)
 
 

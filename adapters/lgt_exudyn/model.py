@@ -14,6 +14,7 @@ import numpy as np
 
 from lgt_bridge.errors import InputError
 from lgt_bridge.model import Model, combine_iteration, solve_kkt
+from lgt_bridge.switches import REDO
 
 from . import constraints as _constraints
 from .constraints import ConstraintRows
@@ -159,20 +160,19 @@ class ExudynModel(StepHooks, Model):
     # ------------------------------------------------------------------ discontinuous states
     def _post_newton(self, q, V, t):
         """Exudyn's discontinuous iteration at the end of a step (its PostNewton: contact and
-        friction states updated from the state (q, V, t)); True when they changed by more
-        than timeIntegration.discontinuous.iterationTolerance."""
+        friction states updated from the state (q, V, t)): True for a switch, REDO when they
+        moved by more than timeIntegration.discontinuous.iterationTolerance, else False."""
         self.write_back(q, V, t)
         gaps, modes = self._gap_rows, self._mode_rows
         d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) else None
-        if float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol:
-            return True
-        if d0 is None:
-            return False
+        moved = float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol
         # a contact gap that changes sign (the contact closing or opening), or a mode whose sign
-        # changes (a limit stop reached or left, stick <-> slip), is a switch however small the
-        # force error: otherwise the step that crosses it keeps the old state to its end
-        d1 = np.array(self.sd.GetDataCoordinates())
-        return bool(np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes])))
+        # changes (a limit stop reached or left, stick <-> slip), is a switch to locate however
+        # small the force error; a force error alone redoes the step, as Exudyn iterates
+        d1 = None if d0 is None else np.array(self.sd.GetDataCoordinates())
+        if d1 is not None and (np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes]))):
+            return True
+        return REDO if moved else False
 
     def discontinuous_state(self):
         """The data coordinates at a step's start (read once per step, before its first

@@ -220,14 +220,15 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     rows = _OutputRows(sim, t1, lambda: solver.it.currentStepSize)
     t_last = t1 - 1e-12 * max(1.0, abs(t1))
 
-    # the data coordinates (contact and friction states) as the bridge's steps left them:
-    # Exudyn's loop runs its own PostNewton on the output state after each of its steps,
+    # the data coordinates (contact and friction states) as the bridge's steps left them, and
+    # Exudyn's step they were kept at: Exudyn's loop runs its own PostNewton on the output
+    # state after each of its steps (repeating the step's call while that changes them),
     # which may lie before the bridge's last step and undo a switch the bridge has passed
-    data = [np.array(sd.GetDataCoordinates())] if sd.DataSize() else None
+    data = [np.array(sd.GetDataCoordinates()), None] if sd.DataSize() else None
 
     def newton(solver, mbs_, settings):
         t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h
-        if data is not None:
+        if data is not None and t_out != data[1]:
             sd.SetDataCoordinates(data[0])
         try:
             if prestep:              # the model may have changed: no stage carried over
@@ -257,7 +258,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             # and for the final state
             last = t_out >= t_last
             if data is not None:
-                data[0] = np.array(sd.GetDataCoordinates())
+                data[0], data[1] = np.array(sd.GetDataCoordinates()), t_out
             model.write_outputs(q_out, V_out, t_out, accelerations or last, multipliers or last)
         except _events.Terminal as stop:       # the state is at the event: Exudyn's run ends there
             stopped.append(stop.message)

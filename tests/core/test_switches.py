@@ -5,7 +5,7 @@ penalty floor whose contact is active while its gap is closed and its force comp
 import numpy as np
 import pytest
 
-from lgt_bridge import Simulation, simulate
+from lgt_bridge import Simulation, simulate, switches
 from lgt_bridge.model import Layout, Model
 
 import contact_reference as cr
@@ -74,3 +74,57 @@ def test_a_model_without_switch_mode_is_untouched():
     r = simulate(_Drop(with_switches=False), (0.0, 0.5), method="dopri5", rtol=1e-8, atol=1e-8)
     assert "n_switches" not in r.stats
     assert abs(r.q[-1, 0] - (0.55 - 0.5 - 0.5 * G * 0.25)) < 1e-9       # free fall: no mode ever set
+
+
+# --- discontinuous states (post_step): a switch located, a move redone (REDO) ---------------------
+class _Lagged(Model):
+    """ẍ = -x + d: d a discontinuous state that post_step sets to x/2 at each step's end (a
+    force reading a value stored at the last step's end, as Exudyn's RollingDiscPenalty reads
+    its slip velocity). ``kind``: what post_step says when d moved by more than 1e-9 (REDO,
+    True: a switch, or REDO always: states that never settle)."""
+
+    def __init__(self, kind):
+        self.layout = Layout.stacked([], n_vector=1)
+        self.q0, self.V0 = np.array([1.0]), np.array([0.0])
+        self.d, self.kind, self.calls = 0.0, kind, 0
+
+    def f(self, q, V, t):
+        return np.array([-q[0] + self.d])
+
+    def discontinuous_state(self):
+        return self.d
+
+    def set_discontinuous_state(self, d):
+        self.d = d
+
+    def post_step(self, q, V, t):
+        self.calls += 1
+        new, old = 0.5 * q[0], self.d
+        self.d = new
+        if self.kind == "never":
+            return switches.REDO
+        return (switches.REDO if self.kind == "redo" else True) if abs(new - old) > 1e-9 else False
+
+
+def test_states_that_move_redo_the_step_at_its_length():
+    """REDO: each step is redone with the moved states (a fixed point d = x(t + h)/2, as
+    Exudyn's discontinuous iteration) and kept at its length: rkmk4 takes its 50 steps; the
+    motion approaches ẍ = -x/2 (d = x/2 at the step's end, an O(h) lag): x(1) within 2e-3 of
+    cos(1/√2). The same moves reported as switches shorten every step."""
+    redo, switch = _Lagged("redo"), _Lagged("switch")
+    r = Simulation(redo, method="rkmk4", dt=0.02).run(1.0, t_eval=[1.0])
+    assert r.success and r.stats["n_steps"] == 50
+    assert abs(r.q[-1][0] - np.cos(1.0 / np.sqrt(2.0))) < 2e-3          # (measured 4e-4; d kept at 0: 0.22)
+    s = Simulation(switch, method="rkmk4", dt=0.02)
+    s.h_event = 1e-3
+    assert s.run(1.0, t_eval=[1.0]).stats["n_steps"] > 200
+
+
+def test_states_that_never_settle_shorten_the_step():
+    """REDO after MAX_DISCONTINUOUS redos still moving: the step is shortened, as Exudyn does
+    with ignoreMaxIterations = False, down to h_event, where it is kept."""
+    m = _Lagged("never")
+    s = Simulation(m, method="rkmk4", dt=0.02)
+    s.h_event = 0.02 / 16
+    r = s.run(0.1, t_eval=[0.1])
+    assert r.success and r.stats["n_steps"] >= 0.1 / s.h_event - 1

@@ -18,7 +18,11 @@ assembled.
   ``velocityLevel`` argument (Exudyn's coordinateVectorConstraintGenericODE2.py);
 - an ALE cable (ObjectALEANCFCable2D elements sharing one ALE coordinate) whose ALE coordinate
   a CoordinateConstraint holds (Exudyn's ANCFmovingRigidBodyTest.py): its mass matrix is
-  singular, positive definite only on the motions the constraints allow.
+  singular, positive definite only on the motions the constraints allow;
+- a wheel of a mecanum car on its own (Exudyn's mecanumWheelRollingDiscTest.py): an
+  ObjectConnectorRollingDiscPenalty with a 45° friction angle, rolling and slipping
+  sideways, whose friction reads the slip velocity its PostNewton stored at the last step's
+  end: the states move at every step without switching.
 """
 import numpy as np
 
@@ -32,6 +36,9 @@ from exudyn.utilities import (CoordinateConstraint, CoordinateSpringDamper, Coor
                               ObjectRigidBody, SensorNode, Force)
 
 from exudyn_special_models import _system, settings  # the shared system and settings
+
+from exudyn.utilities import (AddRigidBody, InertiaCylinder, MarkerBodyRigid, NodeGenericData,  # noqa: E402
+                              ObjectConnectorRollingDiscPenalty, ObjectGround)
 
 
 def _oscillator(mbs, **spring):
@@ -218,3 +225,29 @@ def ale_cable_held(n_elements=4, t_end=0.05, n=50):
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ale, coordinate=0))]))
     mbs.Assemble()
     return mbs, settings(t_end, n), ale
+
+
+def penalty_wheel(t_end=0.2, n=100):
+    """(mbs, settings, node): a 0.3 m disc (EP node) rolling at 2 m/s and slipping sideways at
+    0.5 m/s on the ground through a RollingDiscPenalty (k = 1e5, friction angle 45°), with
+    the settings of Exudyn's mecanum-wheel test (discontinuous.iterationTolerance 0.1,
+    ignoreMaxIterations False, spectral radius 0.5)."""
+    mbs, r = _system(), 0.3
+    inertia = InertiaCylinder(density=1000, length=0.1, outerRadius=r, axis=0)
+    node, body = AddRigidBody(mainSys=mbs, inertia=inertia, nodeType=exu.NodeType.RotationEulerParameters,
+                              position=[0, 0, r], velocity=[0.5, -2, 0], angularVelocity=[2 / r, 0, 0],
+                              gravity=[0, 0, -9.81])
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    mw = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body, localPosition=[0, 0, 0]))
+    nd = mbs.AddNode(NodeGenericData(initialCoordinates=[0, 0, 0], numberOfDataCoordinates=3))
+    mbs.AddObject(ObjectConnectorRollingDiscPenalty(markerNumbers=[mg, mw], nodeNumber=nd, discRadius=r,
+                                                    dryFriction=[1.0, 0.0], dryFrictionAngle=0.25 * np.pi,
+                                                    dryFrictionProportionalZone=0.1, contactStiffness=1e5,
+                                                    contactDamping=1e3))
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.generalizedAlpha.spectralRadius = 0.5
+    s.timeIntegration.discontinuous.iterationTolerance = 0.1
+    s.timeIntegration.discontinuous.ignoreMaxIterations = False
+    return mbs, s, node

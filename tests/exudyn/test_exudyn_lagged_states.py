@@ -1,0 +1,59 @@
+"""Exudyn data coordinates that move at every step without switching: a RollingDiscPenalty's
+friction reads the slip velocity its PostNewton stored at the last step's end (Exudyn's
+mecanumWheelRollingDiscTest.py timed out through the bridge at 90 s; Exudyn takes 0.8 s).
+
+Each such move used to count as a switch to locate, so every step was cut to a quarter down
+to 1e-7 of the span (a single wheel: 4305 generalized-α steps for Exudyn's 100, 47 s). Now a
+force error of PostNewton without a sign change of a gap or mode redoes the step with the
+new states, as Exudyn's discontinuous iteration does (``lgt_bridge.switches.REDO``)."""
+import warnings
+
+import numpy as np
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from lgt_bridge.errors import ModelNote  # noqa: E402
+from lgt_exudyn import ExudynModel, SolveDynamic  # noqa: E402
+
+from exudyn_sweep_models import penalty_wheel  # noqa: E402
+
+
+def _position(mbs, node):
+    return np.array(mbs.GetNodeOutput(node, exu.OutputVariableType.Position))
+
+
+def test_penalty_wheel_genalpha_takes_exudyns_steps_and_its_result():
+    """genalpha at Exudyn's 100 steps: 100 steps (no cut) and Exudyn's own generalized-α's
+    position at the same steps to 1e-6 (measured 3.6e-7; cutting every step, it was 3e-6)."""
+    mbs, s, node = penalty_wheel()
+    mbs.SolveDynamic(s, showHints=False)
+    ref = _position(mbs, node)
+    mbs, s, node = penalty_wheel()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelNote)
+        SolveDynamic(mbs, s, method="genalpha")
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and st["n_steps"] == 100
+    assert np.abs(_position(mbs, node) - ref).max() < 1e-6
+
+
+def test_penalty_wheel_adaptive_runs_at_its_own_steps():
+    """dopri5 at the script's settings: a few hundred steps (3750 when every move was a switch),
+    within the step dependence the note announces of Exudyn's result (measured 1.1e-5 m)."""
+    mbs, s, node = penalty_wheel()
+    mbs.SolveDynamic(s, showHints=False)
+    ref = _position(mbs, node)
+    mbs, s, node = penalty_wheel()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelNote)
+        SolveDynamic(mbs, s, method="dopri5")
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and st["n_steps"] < 500
+    assert np.abs(_position(mbs, node) - ref).max() < 1e-4
+
+
+def test_a_lagged_force_is_named_when_the_model_is_wrapped():
+    mbs, s, _ = penalty_wheel()
+    with pytest.warns(ModelNote, match=r"ConnectorRollingDiscPenalty.*slip velocity stored at the last step's end"):
+        ExudynModel(mbs, s)
