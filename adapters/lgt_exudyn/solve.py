@@ -316,6 +316,11 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         bar.close()
     if pending:
         raise pending[0]
+    if not (failure or stopped) and sd.GetTime() < t_last:
+        # Exudyn's own loop ended early (a pre-step user function returned False, or its own
+        # checks after a step stopped it): success as Exudyn says it, the message says where
+        stopped.append(f"Exudyn's step loop ended at t = {sd.GetTime():.9g}, before endTime = {t1:g} (a pre-step "
+                       "user function returned False, or Exudyn's own checks after a step stopped it)")
     stepper = sim.stepper
     st = dict(method=method, group=_summary(group, group_asked), chart=_summary(chart, chart_asked),
               rtol=rtol if adaptive else None, atol=atol if adaptive else None,

@@ -70,3 +70,28 @@ def test_the_coordinate_driven_by_its_offset_user_function_follows_it(method):
     SolveDynamic(mbs, s, method=method)
     u = mbs.GetNodeOutput(node, exu.OutputVariableType.Displacement)[0]
     assert u == pytest.approx(0.1 * 0.5 * (1 - np.cos(0.5 * np.pi * 1.0)), abs=1e-10)   # 0.05 at t = 1
+
+
+def test_a_prestep_function_ending_the_run_is_said_as_exudyn_says_it():
+    """A pre-step user function returning False ends Exudyn's loop early: the drop-in returns
+    True as Exudyn's own solver does, at Exudyn's time and state, and its statistics' message
+    says where the loop ended (it said "reached endTime")."""
+    from exudyn.utilities import MassPoint, NodePoint
+    from exudyn_special_models import _system, settings
+
+    def build():
+        mbs = _system()
+        n = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0], initialVelocities=[1, 0, 0]))
+        mbs.AddObject(MassPoint(mass=1, nodeNumber=n))
+        mbs.SetPreStepUserFunction(lambda m, t: t < 0.05)
+        mbs.Assemble()
+        return mbs, settings(0.1, 100)
+    mbs, s = build()
+    assert mbs.SolveDynamic(s, showHints=False)
+    t_ref, x_ref = mbs.systemData.GetTime(), mbs.systemData.GetODE2Coordinates()[0]
+    mbs, s = build()
+    assert SolveDynamic(mbs, s, method="dopri5") is True
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["success"] and "ended at t = 0.05" in st["message"]
+    assert abs(mbs.systemData.GetTime() - t_ref) < 1e-12
+    assert abs(mbs.systemData.GetODE2Coordinates()[0] - x_ref) < 1e-12
