@@ -236,23 +236,24 @@ class AdaptiveRK(ExplicitRK):
 
     def _detect_stiffness(self, t, h, rho):
         """Hairer's test on each accepted step (``rho``: :meth:`stiffness_rate`, None when not
-        measurable): h·ρ above the stability bound in STIFF_STEPS accepted steps (six below it
-        in a row reset the count) means the error control is held at the stability limit by a
-        mode it does not need to resolve: ``stiff`` is then (t, h_stable = bound/ρ, ρ), for the
-        driver to judge whether the run can afford it. Sets ``h_stable`` from the stiffest
+        measurable): h·ρ above the stability bound, or the step held at ``h_stable``, in
+        STIFF_STEPS accepted steps (six neither in a row reset the count) means the step is
+        held at the stability limit by a mode it does not need to resolve: ``stiff`` is then
+        (t, h_stable, ρ) (ρ the stiffest rate measured), for the driver to judge whether the run can afford it. Sets ``h_stable`` from the stiffest
         rate measured (inf: none yet), the cap on the next step's growth."""
         mem = self._rho * self.RHO_DECAY
+        capped = h >= 0.95 * self.h_stable         # the step sat at the cap: held by stability
         if rho is None:
             self._rho = mem
             self.h_stable = self.stability_bound / mem if mem > 0.0 else math.inf
             return
         self._rho = mem = max(rho, mem)
         self.h_stable = self.stability_bound / mem if mem > 0.0 else math.inf
-        if h * rho > self.stability_bound:
+        if h * rho > self.stability_bound or capped:
             self._n_stiff += 1
             self._n_nonstiff = 0
             if self._n_stiff >= self.STIFF_STEPS:
-                self.stiff = (t + h, self.stability_bound / rho, rho)
+                self.stiff = (t + h, self.h_stable, mem)
         else:
             self._n_nonstiff += 1
             if self._n_nonstiff >= 6:
