@@ -15,6 +15,7 @@ every step (engine sensors), ``post_step``/discontinuous states (contact switche
 by shortening the step), and ``min_step`` (a controller shrinking the step below it fails,
 saying why). :func:`~lgt_bridge.simulate` is one ``Simulation(...).run(...)``.
 """
+import math
 import time
 from functools import partial
 
@@ -242,8 +243,11 @@ class Simulation:
         if self.n_steps >= self.max_steps:
             raise StepFailed(self._max_steps_message())
         h_before = self.h
-        rem = target - self.t   # adaptive: the last two steps share it; a shortened step keeps the proposal
-        h_try = 0.5 * rem if st.adaptive and self.h < rem < 2.0 * self.h else min(self.h, rem)
+        rem = target - self.t
+        if st.adaptive and self.h < rem <= st.landing_steps * self.h:     # no sliver of a step
+            h_try = rem / math.ceil(rem / self.h - 1e-9)
+        else:
+            h_try = min(self.h, rem)
         hit = target - (self.t + h_try) <= 1e-12 * max(1.0, abs(target))
         if hit:
             h_try = target - self.t
@@ -262,7 +266,12 @@ class Simulation:
             self.t = cut if cut is not None else (target if hit else self.t + h_try)
             self.model.write_back(st.q, st.V, self.t)
             if st.adaptive:
-                self.h = min(h_new if h_try >= self.h else self.h * min(1.0, h_new / h_try), self.max_step)
+                # a step shortened to land: the carried proposal, shrunk if its error asks (and
+                # its own proposal if longer); neither past the stability limit the stepper measured
+                if h_try < self.h:
+                    carried = self.h * min(1.0, h_new / h_try)
+                    h_new = max(h_new, carried) if st.landing_grows else carried
+                self.h = min(h_new, max(h_try, st.h_stable), self.max_step)
             else:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:

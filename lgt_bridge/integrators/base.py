@@ -96,10 +96,18 @@ class Stepper:
       step computed them anyway (stages, generalized-α's unknowns), else None (events use
       them to see turning points of g inside a step at no cost in f);
     - ``restart_at(q, V, t)``: continue from another state inside the last step (a terminal
-      event), forgetting what the step carried to the next one.
+      event), forgetting what the step carried to the next one;
+    - ``h_stable``: the longest step an explicit adaptive method may grow to, the stability
+      limit of the stiffest mode its steps measured (inf: no such limit known);
+    - ``landing_steps``, ``landing_grows``: an adaptive method's last stretch to a target, when
+      its proposed step covers it in at most that many steps, is taken in equal steps; after
+      such a shortened step the proposal carried on may grow from its error (else it is only
+      shrunk).
     """
 
     adaptive = False
+    h_stable = math.inf
+    landing_steps, landing_grows = 2, False
     dense_capable = False
     dense = None
     n_jacobians = 0

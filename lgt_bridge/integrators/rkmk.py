@@ -168,9 +168,19 @@ class FixedRK(ExplicitRK):
 
 class AdaptiveRK(ExplicitRK):
     """Embedded pair with step-size control (Hairer-Wanner: PI control for DOPRI5,
-    err^(-1/8) with factors in [1/3, 6] for DOP853) and dense output."""
+    err^(-1/8) with factors in [1/3, 6] for DOP853) and dense output.
+
+    On a mildly stiff model (PD-controlled robots) the error control alone grows the step
+    past the stability limit of the stiffest mode whenever that mode is quiet, and the step
+    is rejected when it wakes (about one rejected step per 20 ms horizon on a PD-controlled
+    talos). So a step grows no further than ``h_stable`` = bound/ρ, ρ the stiffest rate
+    the accepted steps measured (Hairer's stiffness estimate, fading by RHO_DECAY per step);
+    a step already beyond it is kept, not shrunk (the error control shrinks it if needed)."""
 
     adaptive = True
+    # the last stretch to a target in up to four equal steps, the proposal free to grow after
+    # them (to h_stable): no sliver of a step, and no proposal ratcheting down on them
+    landing_steps, landing_grows = 4, True
 
     def __init__(self, problem, tableau, rtol, atol, projector=None, first_step=None):
         super().__init__(problem, tableau, projector)
@@ -186,6 +196,8 @@ class AdaptiveRK(ExplicitRK):
         self.stability_bound = self.STABILITY_BOUND.get(tableau.stages, 3.25)
         self._n_stiff = self._n_nonstiff = 0
         self.stiff = None          # (t, h_stable, rho) once the accepted steps sit at the stability limit
+        self.h_stable = math.inf   # bound/ρ: a step may not grow past it (see the class docstring)
+        self._rho = 0.0            # the stiffest rate measured, fading by RHO_DECAY per step
 
     @property
     def dense(self):
@@ -205,6 +217,10 @@ class AdaptiveRK(ExplicitRK):
     STABILITY_BOUND = {7: 3.25, 13: 6.1}
     #: accepted steps in a row at the stability limit before the model is called stiff (Hairer: 15)
     STIFF_STEPS = 15
+    #: the stiffest rate measured so far fades by this factor per accepted step, unless a step
+    #: measures a higher one: a step whose stages barely excite the stiff mode (after short
+    #: steps damped it, at a horizon's end) measures a slow rate, yet the mode is still there
+    RHO_DECAY = 0.95
 
     def stiffness_rate(self, h, num, den):
         """ρ ≈ |f(y_j) − f(y_i)| / |y_j − y_i| from the step's last two stages (both at
@@ -218,19 +234,26 @@ class AdaptiveRK(ExplicitRK):
             return None
         return math.sqrt(num / den)
 
-    def _detect_stiffness(self, t, h, num, den):
-        """Hairer's test on each accepted step: h·ρ above the stability bound in STIFF_STEPS
-        accepted steps (six below it in a row reset the count) means the error control is
+    def _detect_stiffness(self, t, h, rho):
+        """Hairer's test on each accepted step (``rho``: :meth:`stiffness_rate`, None when not
+        measurable): h·ρ above the stability bound, or the step held at ``h_stable``, in
+        STIFF_STEPS accepted steps (six neither in a row reset the count) means the step is
         held at the stability limit by a mode it does not need to resolve: ``stiff`` is then
-        (t, h_stable = bound/ρ, ρ), for the driver to judge whether the run can afford it."""
-        rho = self.stiffness_rate(h, num, den)
+        (t, h_stable, ρ) (ρ the stiffest rate measured), for the driver to judge whether the run can afford it. Sets ``h_stable`` from the stiffest
+        rate measured (inf: none yet), the cap on the next step's growth."""
+        mem = self._rho * self.RHO_DECAY
+        capped = h >= 0.95 * self.h_stable         # the step sat at the cap: held by stability
         if rho is None:
+            self._rho = mem
+            self.h_stable = self.stability_bound / mem if mem > 0.0 else math.inf
             return
-        if h * rho > self.stability_bound:
+        self._rho = mem = max(rho, mem)
+        self.h_stable = self.stability_bound / mem if mem > 0.0 else math.inf
+        if h * rho > self.stability_bound or capped:
             self._n_stiff += 1
             self._n_nonstiff = 0
             if self._n_stiff >= self.STIFF_STEPS:
-                self.stiff = (t + h, self.stability_bound / rho, rho)
+                self.stiff = (t + h, self.h_stable, mem)
         else:
             self._n_nonstiff += 1
             if self._n_nonstiff >= 6:
@@ -293,7 +316,7 @@ class AdaptiveRK(ExplicitRK):
             self.n_rejected += 1
             return False, h * self.control.rejected(en)
         if self._stiff_pair is not None:
-            self._detect_stiffness(t, h, num, den)
+            self._detect_stiffness(t, h, self.stiffness_rate(h, num, den))
         fac = self.control.accepted(en)
         if self.dense_capable:                # the DenseStep itself is made on first use
             self._dense = None
@@ -314,7 +337,9 @@ class AdaptiveRK(ExplicitRK):
             other[1][0] = KW[self.tab.stages - 1]
             self._fsal = True
         self.KX, self.KW = other
-        h_new = min(h * fac, self._hcay)
+        # the step grows no further than the stiffest mode's stability limit (a step already
+        # beyond it is kept, not shrunk: the error control shrinks it when that mode grows)
+        h_new = min(h * fac, self._hcay, max(h, self.h_stable))
         self._hcay *= 1.2
         return True, h_new
 

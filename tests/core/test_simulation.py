@@ -119,7 +119,7 @@ def test_advance_to_many_returns_the_times_the_last_step_covers():
 
 
 def test_a_horizons_end_is_met_without_a_sliver_step_and_the_step_carries_on():
-    # an adaptive run splits the last stretch to a horizon's end between its last two steps
+    # an adaptive run splits the last stretch to a horizon's end into equal steps
     # (no sliver of a step that throws the controller off) and the next horizon starts
     # from the controller's proposal, not from the shortened step
     sim = Simulation(scenes.heavy_top(False), method="dop853", rtol=1e-8, atol=1e-8)
