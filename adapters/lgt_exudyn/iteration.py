@@ -16,12 +16,16 @@ Jacobians.
 
 * :class:`ColouredJacobian` (model): ``jacobians(q, qd, t)`` -> (∂Q_e/∂q_e, ∂Q_e/∂q̇_e) as
   scipy CSR matrices, and ``agrees`` (the analysis' verdict);
+* :func:`newton_matrix` (model, q, V, t, c_acc, c_vel, c_pos, sparse): ``iteration_matrix``
+  itself; :func:`selected_matrix`: its one-Jacobian form without rotation coordinates;
 * :func:`newton_parts` (model, q, V, t, sparse): [M̄, C_t, K_t] of ``iteration_matrix``, by
   :func:`sparse_parts` or from Exudyn's dense Jacobians;
 * :func:`sparse_parts` (model, q, V, t): (M̄, C_t, K_t) of ``iteration_matrix`` as
   scipy.sparse matrices from them, or None when the model keeps the dense path.
 """
 import numpy as np
+
+from lgt_bridge.model import combine_iteration
 
 #: coordinates above which the sparse iteration matrix takes the coloured differences
 #: instead of Exudyn's dense Jacobian (whose transfer grows with their square)
@@ -172,6 +176,44 @@ def sparse_parts(model, q, V, t):
     if model._Mbar_sparse is None:
         model._Mbar_sparse = csr_matrix(model.Mbar)
     return [model._Mbar_sparse, -(H.T @ (Jv @ H)), -(H.T @ (Jq @ H))]
+
+
+def newton_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
+    """``ExudynModel.iteration_matrix``: :func:`selected_matrix` where it applies, else
+    the combination of :func:`newton_parts`, kept for the calls at the same (q, V, t)."""
+    one = selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse)
+    if one is not None:
+        return one
+    key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
+    cached = getattr(model, "_it_cache", None)
+    if cached is None or cached[0] != key:
+        cached = model._it_cache = (key, newton_parts(model, q, V, t, sparse))
+    return combine_iteration(cached[1], c_acc, c_vel, c_pos)
+
+
+def selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
+    """M̄ c_acc + C_t c_vel + K_t c_pos of ``ExudynModel.iteration_matrix`` from one Exudyn
+    Jacobian, ComputeJacobianODE2RHS(-c_pos, -c_vel), on a model without rotation coordinates
+    and with a constant M̄ (H a 0/1 selection): half the Jacobian calls of :func:`newton_parts`,
+    which computes ∂Q_e/∂q_e and ∂Q_e/∂q̇_e apart. None when it does not apply (rotations,
+    M̄ not constant, the coloured differences of large models, or only M̄ asked)."""
+    qi = model.nodes.selection()
+    if qi is None or model.Mbar is None or not (c_vel or c_pos):
+        return None
+    if sparse and model._compiled and model.n2 >= COLOURED_MIN and model.ode1 is None:
+        return None                                 # the coloured differences (newton_parts)
+    q = np.asarray(q, float)
+    model.engine.write(q, model.nodes.rates_from_twist(q, np.asarray(V, float)), t)
+    S, n2 = model.solver, model.n2
+    S.ComputeJacobianODE2RHS(model.mbs, -float(c_pos), -float(c_vel), 1.0, 2)
+    J = np.asarray(S.GetSystemJacobian())
+    out = J[:n2, :n2] if np.array_equal(qi, np.arange(n2)) else J[qi[:, None], qi]
+    if c_acc:
+        out += c_acc * model.Mbar
+    if sparse:
+        from scipy.sparse import csr_matrix
+        return csr_matrix(out)
+    return out
 
 
 def newton_parts(model, q, V, t, sparse):

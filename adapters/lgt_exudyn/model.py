@@ -14,13 +14,14 @@ into the ``Model`` protocol; the compiled backend runs f through :mod:`.kernels`
 import numpy as np
 
 from lgt_bridge.errors import InputError
-from lgt_bridge.model import Model, combine_iteration, solve_kkt
+from lgt_bridge.model import Model, solve_kkt
 
 from . import constraints as _constraints
 from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
+from .iteration import newton_matrix
 from .ode1 import ODE1States
 
 #: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
@@ -355,16 +356,11 @@ class ExudynModel(StepHooks, Model):
         body (tests/test_exudyn_iteration.py): C_t to 3e-8, K_t to 0.1 % (RotVecLG) and 4 % (EP),
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
         not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
-        for the calls at the same (q, V, t). ``sparse``: scipy.sparse matrices (products with
-        a sparse H: large models), as generalized-α asks above its sparse size; on large
-        models with a constant M̄ the Jacobians of Q_e then come from coloured differences
-        (:mod:`.iteration`) instead of Exudyn's dense system Jacobian."""
-        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
-        cached = getattr(self, "_it_cache", None)
-        if cached is None or cached[0] != key:
-            from .iteration import newton_parts
-            cached = self._it_cache = (key, newton_parts(self, q, V, t, sparse))
-        return combine_iteration(cached[1], c_acc, c_vel, c_pos)
+        for the calls at the same (q, V, t); without rotations one Exudyn Jacobian for the
+        combination (:func:`.iteration.selected_matrix`). ``sparse``: scipy.sparse (a sparse
+        H), as generalized-α asks above its sparse size; large models with a constant M̄ take
+        coloured differences of Q_e instead of Exudyn's dense Jacobian (:mod:`.iteration`)."""
+        return newton_matrix(self, q, V, t, c_acc, c_vel, c_pos, sparse)
 
     def constraint_owners(self, rows):
         """The Exudyn objects owning the model's constraint ``rows`` (for messages)."""

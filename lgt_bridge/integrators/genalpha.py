@@ -43,7 +43,8 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize, fd_matrix
+from .genalpha_matrix import (DENSE_MAX, SPARSE_MIN, DensePattern, Kinematics, accepts, coo, csr, factorize,
+                              fd_matrix)
 from .newton_control import AT_FLOOR, CONVERGED, REFRESH, tolerances, verdict
 
 
@@ -115,6 +116,7 @@ class GenAlpha(Stepper):
         self._A_fixed = None
         self._solve = None
         self._memo = {}               # factorize's memory of J's pattern
+        self._pattern = None          # the kept pattern of a dense J (_dense_vector_matrix)
         self._lu_h = None
         self.Wd = None
         self._prev = None
@@ -323,6 +325,8 @@ class GenAlpha(Stepper):
         only: K = M + s_v C_t + s_p K_t, J = [K, Aᵀ; A s_p/(h²β) (A on velocity rows), 0],
         L = diag(M, I) in the acceleration form."""
         m, n, nc = self.prob.model, K.shape[0], self.nc
+        if isinstance(K, np.ndarray) and not self.accel_form:
+            return self._dense_vector_matrix(K, q1), None
         parts = [coo(K)]
         lparts = None
         if self.accel_form:
@@ -337,6 +341,28 @@ class GenAlpha(Stepper):
                 lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
         shape = (n + nc, n + nc)
         return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
+
+    def _dense_vector_matrix(self, K, q1):
+        """J of :meth:`_vector_matrices` from a dense K: assembled dense, then in a kept
+        sparse pattern above DENSE_MAX (:class:`.genalpha_matrix.DensePattern`)."""
+        n, nc = K.shape[0], self.nc
+        J = np.zeros((n + nc, n + nc))
+        J[:n, :n] = K
+        if nc:
+            A = self._A_fixed if self._A_fixed is not None else self._A(q1)
+            A = A.toarray() if hasattr(A, "toarray") else np.asarray(A, float)
+            J[:n, n:] = A.T
+            J[n:, :n] = A
+            if self._vel_rows is None:
+                J[n:, :n] *= self._consts.k                             # s_p/(h²β) = k
+            else:
+                pos = np.setdiff1d(np.arange(nc), self._vel_rows)        # A D_v/(hγk) = A
+                J[n + pos, :n] *= self._consts.k
+        if n + nc <= DENSE_MAX:
+            return J
+        if self._pattern is None:
+            self._pattern = DensePattern()
+        return self._pattern.csc(J)
 
     def _fd_matrix(self, Wd1, lam, t1, h):
         return fd_matrix(self, Wd1, lam, t1, h)
