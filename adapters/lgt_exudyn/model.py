@@ -233,25 +233,27 @@ class ExudynModel(StepHooks, Model):
             return self.Mbar.copy()
         return self._evaluate(q, np.zeros(self.nv), self.sd.GetTime(), need_gamma=False)[0]
 
-    def _forces_compiled(self, q, V, t):
+    def _forces_compiled(self, q, V, t, g=False):
         """(Q̄, M̄) from the kernels: one state write, ComputeODE2RHS (and ComputeMassMatrix when
-        M̄ is not constant); the state stays written. Fresh arrays."""
+        M̄ is not constant); the state stays written. Fresh arrays. ``g`` (M̄ constant): (Q̄, g)."""
         P = self._P if self._P is not None else self._pack()
         K, S, mbs = self._kernels, self.solver, self.mbs
         q, V = np.ascontiguousarray(q, float), np.ascontiguousarray(V, float)
         K.write(P.T, P.off, P.w, q, V, 0.0, P.qpos, P.qvel)
         self.sd.SetTime(t)
         S.ComputeODE2RHS(mbs)
-        Qbar = np.empty(self.nv)
+        Qbar, Mbar = np.empty(self.nv), self.Mbar
         if P.constant_mass:
-            K.forces(P.T, P.off, P.w, q, V, S.GetSystemResidual(), P.empty, Qbar, P.empty)
-            Mbar = self.Mbar
+            if g:                   # the AE rows of the residual (its ODE2 rows stay)
+                S.ComputeAlgebraicEquations(mbs, False)
+            res = S.GetSystemResidual()
+            K.forces(P.T, P.off, P.w, q, V, res, P.empty, Qbar, P.empty)
         else:
             S.ComputeMassMatrix(mbs)
             Mbar = np.empty((self.nv, self.nv))
             K.forces(P.T, P.off, P.w, q, V, S.GetSystemResidual(), S.GetSystemMassMatrix(), Qbar, Mbar)
         self.n_eval += 1
-        return Qbar, Mbar
+        return (Qbar, self.cons.of_residual(res, t)) if g else (Qbar, Mbar)
 
     def _forces2(self, q, V, t):
         if self._compiled:
@@ -334,6 +336,8 @@ class ExudynModel(StepHooks, Model):
         """(Q̄, g) at one state: one write for both (``Model.forces_and_constraints``)."""
         if not self.n_constraints or self.ode1 is not None or not self._compiled:
             return Model.forces_and_constraints(self, q, V, t)
+        if self._pack().constant_mass:
+            return self._forces_compiled(q, V, t, g=True)
         return self._forces_compiled(q, V, t)[0], self.cons.at_written(t)
 
     def solve_mass(self, q, B):

@@ -258,8 +258,14 @@ def _lu_solver(lu):
     from ..kernels.linalg import lu_solve
     n = lu.shape[0]
     L, U = lu.L, lu.U
+    # L's entries below its diagonal; U's diagonal first in each column (lu_solve's layout)
+    col = np.repeat(np.arange(n), np.diff(L.indptr))
+    below = L.indices > col
+    lp = np.concatenate([[0], np.cumsum(np.bincount(col[below], minlength=n))])
+    col = np.repeat(np.arange(n), np.diff(U.indptr))
+    order = np.lexsort((U.indices != col, col))
     f = [np.asarray(a, np.int64) if a.dtype.kind == "i" else np.ascontiguousarray(a, dtype=float)
-         for a in (L.indptr, L.indices, L.data, U.indptr, U.indices, U.data)]
+         for a in (lp, L.indices[below], L.data[below], U.indptr, U.indices[order], U.data[order])]
     perm = np.concatenate([lu.perm_r, lu.perm_c]).astype(np.int64)
 
     def solve(r):

@@ -112,10 +112,12 @@ def envelope_solve(L, first, start, x):
 @njit(cache=True, error_model="numpy")
 def lu_solve(lp, li, lv, up, ui, uv, perm, b, x):
     """x <- the solution of A x = b from a sparse LU factorization Pr A Pc = L U (SuperLU's
-    factors as they come, CSC: ``lp, li, lv`` of L, unit diagonal, ``up, ui, uv`` of U, row
-    indices in any order) and ``perm`` = (perm_r, perm_c) stacked: Pr b has b[i] at
-    perm_r[i], and x[i] is y[perm_c[i]] for the solution y of L U y = Pr b. The numpy
-    reference is ``scipy.sparse.linalg.splu(A).solve``; tests hold them equal."""
+    factors in CSC, as ``genalpha_matrix._lu_solver`` arranges them: ``lp, li, lv`` the
+    entries of L below its unit diagonal, ``up, ui, uv`` of U with each column's diagonal
+    entry first, the others in any order) and ``perm`` = (perm_r, perm_c) stacked: Pr b has
+    b[i] at perm_r[i], and x[i] is y[perm_c[i]] for the solution y of L U y = Pr b. No
+    branch in the inner loops. The numpy reference is ``scipy.sparse.linalg.splu(A).solve``;
+    tests hold them equal."""
     n = b.shape[0]
     y = np.empty(n)
     for i in range(n):
@@ -123,17 +125,12 @@ def lu_solve(lp, li, lv, up, ui, uv, perm, b, x):
     for j in range(n):                      # L y = Pr b, column by column
         yj = y[j]
         for k in range(lp[j], lp[j + 1]):
-            if li[k] > j:
-                y[li[k]] -= lv[k] * yj
+            y[li[k]] -= lv[k] * yj
     for j in range(n - 1, -1, -1):          # U y = y, column by column from the last
-        d = 0.0
-        for k in range(up[j], up[j + 1]):
-            if ui[k] == j:
-                d = uv[k]
-        yj = y[j] / d
+        k0 = up[j]
+        yj = y[j] / uv[k0]
         y[j] = yj
-        for k in range(up[j], up[j + 1]):
-            if ui[k] < j:
-                y[ui[k]] -= uv[k] * yj
+        for k in range(k0 + 1, up[j + 1]):
+            y[ui[k]] -= uv[k] * yj
     for i in range(n):
         x[i] = y[perm[n + i]]
