@@ -202,8 +202,7 @@ def selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
         return None
     if sparse and model._compiled and model.n2 >= COLOURED_MIN and model.ode1 is None:
         return None                                 # the coloured differences (newton_parts)
-    q = np.asarray(q, float)
-    model.engine.write(q, model.nodes.rates_from_twist(q, np.asarray(V, float)), t)
+    model.write_back(np.asarray(q, float), np.asarray(V, float), t)       # (no ODE1 states here)
     S, n2 = model.solver, model.n2
     S.ComputeJacobianODE2RHS(model.mbs, -float(c_pos), -float(c_vel), 1.0, 2)
     J = np.asarray(S.GetSystemJacobian())
