@@ -40,16 +40,18 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
         A = ga._A_fixed = np.asarray(ga._A(ga.q), dtype=float)
     c = ga._affine(h)
     state, at = prob.ga_state, (c.s_v, c.sp, c.W0, c.dX0, ga._to_local)
-    forces_and_constraints, Mcsr = m.forces_and_constraints, ga._Mcsr
+    forces_and_constraints, head = m.forces_and_constraints, (*ga._Mcsr, A)
     sizes, since = [], []         # the step's update sizes; those since the last refresh
     factors = getattr(ga._solve, "factors", None)
+    tail = None if factors is None else (cg, *factors, z, r)
     for _ in range(ga.nmax):
         if factors is not None:
             q1, V1 = state(Wd1, *at)[:2]
             prob.n_f += 1
             Q, g = forces_and_constraints(q1, V1, t1)
-            d2 = ga_force_newton(*Mcsr, np.asarray(ga._A(q1), dtype=float) if A is None else A,
-                                 Q, g, cg, *factors, z, r)
+            if A is None:
+                head = (*ga._Mcsr, np.asarray(ga._A(q1), dtype=float))
+            d2 = ga_force_newton(*head, Q, g, *tail)
             if d2 < 0.0:
                 ga._why = "diverged (non-finite residual)"
                 return None
@@ -73,6 +75,7 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
             ga._jacobian(Wd1, lam, t1, h)
             since = []
             factors = getattr(ga._solve, "factors", None)
+            tail = None if factors is None else (cg, *factors, z, r)
     return _not_converged(ga, sizes, tol, floor)
 
 
