@@ -21,11 +21,15 @@ Jacobians.
 * :func:`newton_parts` (model, q, V, t, sparse): [M̄, C_t, K_t] of ``iteration_matrix``, by
   :func:`sparse_parts` or from Exudyn's dense Jacobians;
 * :func:`sparse_parts` (model, q, V, t): (M̄, C_t, K_t) of ``iteration_matrix`` as
-  scipy.sparse matrices from them, or None when the model keeps the dense path.
+  scipy.sparse matrices from them, or None when the model keeps the dense path;
+* :func:`residual_function` (model): ``forces_and_constraints`` with its lookups bound, for
+  the Newton updates (``forces_and_constraints_function``).
 """
 import numpy as np
 
 from lgt_bridge.model import combine_iteration
+
+from .engine import engine_error
 
 #: coordinates above which the sparse iteration matrix takes the coloured differences
 #: instead of Exudyn's dense Jacobian (whose transfer grows with their square)
@@ -252,3 +256,46 @@ def newton_parts(model, q, V, t, sparse):
         JH = J @ H if sparse else (H.T @ J.T).T                     # J H
         parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
     return parts
+
+
+def residual_function(model):
+    """(q, V, t) ↦ (Q̄, g) as ``ExudynModel.forces_and_constraints`` takes them on its compiled
+    path with a constant M̄ (one state write, ComputeODE2RHS and ComputeAlgebraicEquations, one
+    residual read), with what stays the same looked up once (~2 µs less a call; the ANCF cable
+    pendulum's generalized-α makes 6400 of them); Exudyn's exceptions become ModelErrors as
+    there. Kept on the model for its solver, kernel tables and constraint rows; None where the
+    method takes another path."""
+    if not model.n_constraints or model.ode1 is not None or not model._compiled:
+        return None
+    P, S, cons = model._pack(), model.solver, model.cons
+    if not P.constant_mass:
+        return None
+    kept = getattr(model, "_residual_function", None)
+    if kept is not None and kept[0] == (S, P, cons):
+        return kept[1]
+    K, sd, mbs, nv = model._kernels, model.sd, model.mbs, model.nv
+    write, forces, of_residual = K.write, K.forces, cons.of_residual
+    ode2, ae, residual, set_time = S.ComputeODE2RHS, S.ComputeAlgebraicEquations, S.GetSystemResidual, sd.SetTime
+    T, off, w, qpos, qvel, empty = P.T, P.off, P.w, P.qpos, P.qvel, P.empty
+    contiguous = np.ascontiguousarray
+
+    def evaluate(q, V, t):
+        q, V = contiguous(q, float), contiguous(V, float)
+        try:
+            write(T, off, w, q, V, 0.0, qpos, qvel)
+            set_time(t)
+            ode2(mbs)
+            ae(mbs, False)                  # the AE rows of the residual (its ODE2 rows stay)
+            res = residual()
+            Q = np.empty(nv)
+            forces(T, off, w, q, V, res, empty, Q, empty)
+            g = of_residual(res, t)
+        except Exception as exc:
+            err = engine_error(sd, "forces_and_constraints", exc)
+            if err is None:
+                raise
+            raise err from exc
+        model.n_eval += 1
+        return Q, g
+    model._residual_function = ((S, P, cons), evaluate)
+    return evaluate

@@ -21,7 +21,7 @@ from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, gap_rows, has_prestep, refuse_impact_models
-from .iteration import newton_matrix
+from .iteration import newton_matrix, residual_function
 from .ode1 import ODE1States
 
 #: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
@@ -233,9 +233,9 @@ class ExudynModel(StepHooks, Model):
             return self.Mbar.copy()
         return self._evaluate(q, np.zeros(self.nv), self.sd.GetTime(), need_gamma=False)[0]
 
-    def _forces_compiled(self, q, V, t, g=False):
+    def _forces_compiled(self, q, V, t):
         """(Q̄, M̄) from the kernels: one state write, ComputeODE2RHS (and ComputeMassMatrix when
-        M̄ is not constant); the state stays written. Fresh arrays. ``g`` (M̄ constant): (Q̄, g)."""
+        M̄ is not constant); the state stays written. Fresh arrays."""
         P = self._P if self._P is not None else self._pack()
         K, S, mbs = self._kernels, self.solver, self.mbs
         q, V = np.ascontiguousarray(q, float), np.ascontiguousarray(V, float)
@@ -244,16 +244,13 @@ class ExudynModel(StepHooks, Model):
         S.ComputeODE2RHS(mbs)
         Qbar, Mbar = np.empty(self.nv), self.Mbar
         if P.constant_mass:
-            if g:                   # the AE rows of the residual (its ODE2 rows stay)
-                S.ComputeAlgebraicEquations(mbs, False)
-            res = S.GetSystemResidual()
-            K.forces(P.T, P.off, P.w, q, V, res, P.empty, Qbar, P.empty)
+            K.forces(P.T, P.off, P.w, q, V, S.GetSystemResidual(), P.empty, Qbar, P.empty)
         else:
             S.ComputeMassMatrix(mbs)
             Mbar = np.empty((self.nv, self.nv))
             K.forces(P.T, P.off, P.w, q, V, S.GetSystemResidual(), S.GetSystemMassMatrix(), Qbar, Mbar)
         self.n_eval += 1
-        return (Qbar, self.cons.of_residual(res, t)) if g else (Qbar, Mbar)
+        return Qbar, Mbar
 
     def _forces2(self, q, V, t):
         if self._compiled:
@@ -336,9 +333,11 @@ class ExudynModel(StepHooks, Model):
         """(Q̄, g) at one state: one write for both (``Model.forces_and_constraints``)."""
         if not self.n_constraints or self.ode1 is not None or not self._compiled:
             return Model.forces_and_constraints(self, q, V, t)
-        if self._pack().constant_mass:
-            return self._forces_compiled(q, V, t, g=True)
-        return self._forces_compiled(q, V, t)[0], self.cons.at_written(t)
+        fast = residual_function(self)           # a constant M̄: one residual read
+        return fast(q, V, t) if fast else (self._forces_compiled(q, V, t)[0], self.cons.at_written(t))
+
+    def forces_and_constraints_function(self):
+        return residual_function(self) or self.forces_and_constraints
 
     def solve_mass(self, q, B):
         """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""

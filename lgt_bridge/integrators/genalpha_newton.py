@@ -5,8 +5,8 @@ Two loops over the same updates:
 * :func:`_fused`: the residual in forces with a constant M̄, position-level constraints and a
   sparse LU with compiled factors: per update one state kernel, one model call for (Q, g)
   and one kernel for the residual, the solve and the update (``ga_force_newton``); what
-  stays the same through the step (the state's affine parts, the model's bound method, A
-  when constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
+  stays the same through the step (the state's affine parts, the model's
+  ``forces_and_constraints_function``, A when constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
   ~20 µs (9 µs of them Exudyn's own force evaluation), each lookup saved counts.
 * :func:`_general`: every other residual form, through ``GenAlpha._residual`` and the
   stored solver.
@@ -40,7 +40,8 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
         A = ga._A_fixed = np.asarray(ga._A(ga.q), dtype=float)
     c = ga._affine(h)
     state, at = prob.ga_state, (c.s_v, c.sp, c.W0, c.dX0, ga._to_local)
-    forces_and_constraints, head = m.forces_and_constraints, (*ga._Mcsr, A)
+    fc = getattr(m, "forces_and_constraints_function", None)
+    forces_and_constraints, head = (fc() if fc else m.forces_and_constraints), (*ga._Mcsr, A)
     sizes, since = [], []         # the step's update sizes; those since the last refresh
     factors = getattr(ga._solve, "factors", None)
     tail = None if factors is None else (cg, *factors, z, r)
