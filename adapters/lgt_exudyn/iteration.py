@@ -212,7 +212,7 @@ def selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
     J = np.asarray(S.GetSystemJacobian())
     out = J[:n2, :n2] if np.array_equal(qi, np.arange(n2)) else J[qi[:, None], qi]
     if c_acc:
-        out += c_acc * model.Mbar
+        out += model.Mbar if c_acc == 1.0 else c_acc * model.Mbar
     if sparse:
         from scipy.sparse import csr_matrix
         return csr_matrix(out)
@@ -277,7 +277,7 @@ def residual_function(model):
     write, forces, of_residual = K.write, K.forces, cons.of_residual
     ode2, ae, residual, set_time = S.ComputeODE2RHS, S.ComputeAlgebraicEquations, S.GetSystemResidual, sd.SetTime
     T, off, w, qpos, qvel, empty = P.T, P.off, P.w, P.qpos, P.qvel, P.empty
-    contiguous = np.ascontiguousarray
+    contiguous, rows = np.ascontiguousarray, cons.engine.ae0 + cons.ae_keep
 
     def evaluate(q, V, t):
         q, V = contiguous(q, float), contiguous(V, float)
@@ -289,7 +289,8 @@ def residual_function(model):
             res = residual()
             Q = np.empty(nv)
             forces(T, off, w, q, V, res, empty, Q, empty)
-            g = of_residual(res, t)
+            # g: the kept rows, unless rows are velocity-level or ramped (of_residual's cases)
+            g = res[rows] if not cons.nonholonomic and cons.ramp is None else of_residual(res, t)
         except Exception as exc:
             err = engine_error(sd, "forces_and_constraints", exc)
             if err is None:
