@@ -46,7 +46,7 @@ def tolerances(W, q, newton_tol, h, beta, constrained):
     converged."""
     w_rms = math.sqrt(W.dot(W) / max(len(W), 1))
     tol = newton_tol * (1.0 + w_rms)
-    qmax = max(float(q.max()), -float(q.min())) if len(q) and constrained else 0.0
+    qmax = float(np.abs(q).max()) if len(q) and constrained else 0.0
     floor = FLOOR * _EPS * ((1.0 + w_rms) + (qmax / (h * beta) if constrained else 0.0))
     return tol, max(tol, floor)
 
