@@ -3,8 +3,8 @@ step), its matrix kept or refreshed as :func:`.newton_control.verdict` says.
 
 Two loops over the same updates:
 * :func:`_fused`: the residual in forces with a constant M̄, position-level constraints and a
-  sparse LU with compiled factors: per update one state kernel, one model call for (Q, g)
-  and one kernel for the residual, the solve and the update (``ga_force_newton``); what
+  sparse LU with compiled factors: per update one model call for (Q, g) and one kernel for
+  the residual, the solve, the update and the state at the new Ẇ (``ga_force_newton``); what
   stays the same through the step (the state's affine parts, the model's
   ``forces_and_constraints_function``, A when constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
   ~20 µs (9 µs of them Exudyn's own force evaluation), each lookup saved counts.
@@ -40,14 +40,15 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
         A = ga._A_fixed = np.asarray(ga._A(ga.q), dtype=float)
     c = ga._affine(h)
     state, at = prob.ga_state, (c.s_v, c.sp, c.W0, c.dX0, ga._to_local)
+    moved, q1, V1 = prob.ga_state_args(*at)          # the kernel leaves the state at its new Ẇ
     fc = getattr(m, "forces_and_constraints_function", None)
     forces_and_constraints, head = (fc() if fc else m.forces_and_constraints), (*ga._Mcsr, A)
     sizes, since = [], []         # the step's update sizes; those since the last refresh
     factors = getattr(ga._solve, "factors", None)
-    tail = None if factors is None else (cg, *factors, z, r)
+    tail = None if factors is None else (cg, *factors, z, r, *moved)
+    state(Wd1, *at)
     for _ in range(ga.nmax):
         if factors is not None:
-            q1, V1 = state(Wd1, *at)[:2]
             prob.n_f += 1
             Q, g = forces_and_constraints(q1, V1, t1)
             if A is None:
@@ -76,7 +77,8 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
             ga._jacobian(Wd1, lam, t1, h)
             since = []
             factors = getattr(ga._solve, "factors", None)
-            tail = None if factors is None else (cg, *factors, z, r)
+            tail = None if factors is None else (cg, *factors, z, r, *moved)
+            state(Wd1, *at)               # (the matrix may have used the work array)
     return _not_converged(ga, sizes, tol, floor)
 
 
