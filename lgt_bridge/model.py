@@ -207,6 +207,12 @@ class Model:
         """(Q(q, V, t), g(q, t)): both at one state (an engine writes it once)."""
         return self.forces(q, V, t), self.constraints_at(q, t)
 
+    def forces_and_constraints_function(self):
+        """A callable (q, V, t) -> ``forces_and_constraints(q, V, t)`` for a caller about to
+        evaluate it many times in a row (generalized-α's Newton updates, asked once per
+        step): a model may bind what stays the same. Default: the bound method itself."""
+        return self.forces_and_constraints
+
     #: the mass matrix when it is the same at every q (dense or scipy.sparse), else None:
     #: generalized-α then keeps its residual in forces, M V̇ - Q + Aᵀλ, with one product by it
     constant_mass = None

@@ -286,7 +286,12 @@ class ConstraintRows:
         """g of the kept rows at the coordinates and time written in the system (t: that time)."""
         E = self.engine
         E.solver.ComputeAlgebraicEquations(E.mbs, False)
-        g = np.asarray(E.solver.GetSystemResidual())[E.ae0:][self.ae_keep]
+        return self.of_residual(E.solver.GetSystemResidual(), t)
+
+    def of_residual(self, res, t):
+        """g of the kept rows from Exudyn's system residual ``res`` read after
+        ComputeAlgebraicEquations (position level) at time t."""
+        g = np.asarray(res)[self.engine.ae0:][self.ae_keep]
         if self.nonholonomic:
             g[list(self.nonholonomic)] = 0.0
         if self.ramp is not None:

@@ -16,12 +16,20 @@ Jacobians.
 
 * :class:`ColouredJacobian` (model): ``jacobians(q, qd, t)`` -> (∂Q_e/∂q_e, ∂Q_e/∂q̇_e) as
   scipy CSR matrices, and ``agrees`` (the analysis' verdict);
+* :func:`newton_matrix` (model, q, V, t, c_acc, c_vel, c_pos, sparse): ``iteration_matrix``
+  itself; :func:`selected_matrix`: its one-Jacobian form without rotation coordinates;
 * :func:`newton_parts` (model, q, V, t, sparse): [M̄, C_t, K_t] of ``iteration_matrix``, by
   :func:`sparse_parts` or from Exudyn's dense Jacobians;
 * :func:`sparse_parts` (model, q, V, t): (M̄, C_t, K_t) of ``iteration_matrix`` as
-  scipy.sparse matrices from them, or None when the model keeps the dense path.
+  scipy.sparse matrices from them, or None when the model keeps the dense path;
+* :func:`residual_function` (model): ``forces_and_constraints`` with its lookups bound, for
+  the Newton updates (``forces_and_constraints_function``).
 """
 import numpy as np
+
+from lgt_bridge.model import combine_iteration
+
+from .engine import engine_error
 
 #: coordinates above which the sparse iteration matrix takes the coloured differences
 #: instead of Exudyn's dense Jacobian (whose transfer grows with their square)
@@ -174,6 +182,43 @@ def sparse_parts(model, q, V, t):
     return [model._Mbar_sparse, -(H.T @ (Jv @ H)), -(H.T @ (Jq @ H))]
 
 
+def newton_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
+    """``ExudynModel.iteration_matrix``: :func:`selected_matrix` where it applies, else
+    the combination of :func:`newton_parts`, kept for the calls at the same (q, V, t)."""
+    one = selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse)
+    if one is not None:
+        return one
+    key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
+    cached = getattr(model, "_it_cache", None)
+    if cached is None or cached[0] != key:
+        cached = model._it_cache = (key, newton_parts(model, q, V, t, sparse))
+    return combine_iteration(cached[1], c_acc, c_vel, c_pos)
+
+
+def selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
+    """M̄ c_acc + C_t c_vel + K_t c_pos of ``ExudynModel.iteration_matrix`` from one Exudyn
+    Jacobian, ComputeJacobianODE2RHS(-c_pos, -c_vel), on a model without rotation coordinates
+    and with a constant M̄ (H a 0/1 selection): half the Jacobian calls of :func:`newton_parts`,
+    which computes ∂Q_e/∂q_e and ∂Q_e/∂q̇_e apart. None when it does not apply (rotations,
+    M̄ not constant, the coloured differences of large models, or only M̄ asked)."""
+    qi = model.nodes.selection()
+    if qi is None or model.Mbar is None or not (c_vel or c_pos):
+        return None
+    if sparse and model._compiled and model.n2 >= COLOURED_MIN and model.ode1 is None:
+        return None                                 # the coloured differences (newton_parts)
+    model.write_back(np.asarray(q, float), np.asarray(V, float), t)       # (no ODE1 states here)
+    S, n2 = model.solver, model.n2
+    S.ComputeJacobianODE2RHS(model.mbs, -float(c_pos), -float(c_vel), 1.0, 2)
+    J = np.asarray(S.GetSystemJacobian())
+    out = J[:n2, :n2] if np.array_equal(qi, np.arange(n2)) else J[qi[:, None], qi]
+    if c_acc:
+        out += model.Mbar if c_acc == 1.0 else c_acc * model.Mbar
+    if sparse:
+        from scipy.sparse import csr_matrix
+        return csr_matrix(out)
+    return out
+
+
 def newton_parts(model, q, V, t, sparse):
     """[M̄, C_t, K_t] of ``ExudynModel.iteration_matrix`` at (q, V, t) (``sparse``: scipy.sparse
     matrices): the coloured differences (:func:`sparse_parts`) on large compiled models, else
@@ -211,3 +256,47 @@ def newton_parts(model, q, V, t, sparse):
         JH = J @ H if sparse else (H.T @ J.T).T                     # J H
         parts.append(-(H.T @ JH) if sparse else -np.asarray(H.T @ JH))
     return parts
+
+
+def residual_function(model):
+    """(q, V, t) ↦ (Q̄, g) as ``ExudynModel.forces_and_constraints`` takes them on its compiled
+    path with a constant M̄ (one state write, ComputeODE2RHS and ComputeAlgebraicEquations, one
+    residual read), with what stays the same looked up once (~2 µs less a call; the ANCF cable
+    pendulum's generalized-α makes 6400 of them); Exudyn's exceptions become ModelErrors as
+    there. Kept on the model for its solver, kernel tables and constraint rows; None where the
+    method takes another path."""
+    if not model.n_constraints or model.ode1 is not None or not model._compiled:
+        return None
+    P, S, cons = model._pack(), model.solver, model.cons
+    if not P.constant_mass:
+        return None
+    kept = getattr(model, "_residual_function", None)
+    if kept is not None and kept[0] == (S, P, cons):
+        return kept[1]
+    K, sd, mbs, nv = model._kernels, model.sd, model.mbs, model.nv
+    write, forces, of_residual = K.write, K.forces, cons.of_residual
+    ode2, ae, residual, set_time = S.ComputeODE2RHS, S.ComputeAlgebraicEquations, S.GetSystemResidual, sd.SetTime
+    T, off, w, qpos, qvel, empty = P.T, P.off, P.w, P.qpos, P.qvel, P.empty
+    contiguous, rows = np.ascontiguousarray, cons.engine.ae0 + cons.ae_keep
+
+    def evaluate(q, V, t):
+        q, V = contiguous(q, float), contiguous(V, float)
+        try:
+            write(T, off, w, q, V, 0.0, qpos, qvel)
+            set_time(t)
+            ode2(mbs)
+            ae(mbs, False)                  # the AE rows of the residual (its ODE2 rows stay)
+            res = residual()
+            Q = np.empty(nv)
+            forces(T, off, w, q, V, res, empty, Q, empty)
+            # g: the kept rows, unless rows are velocity-level or ramped (of_residual's cases)
+            g = res[rows] if not cons.nonholonomic and cons.ramp is None else of_residual(res, t)
+        except Exception as exc:
+            err = engine_error(sd, "forces_and_constraints", exc)
+            if err is None:
+                raise
+            raise err from exc
+        model.n_eval += 1
+        return Q, g
+    model._residual_function = ((S, P, cons), evaluate)
+    return evaluate

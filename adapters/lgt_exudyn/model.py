@@ -13,7 +13,7 @@ protocol here; the compiled backend runs f through :mod:`.kernels`."""
 import numpy as np
 
 from lgt_bridge.errors import InputError
-from lgt_bridge.model import Model, combine_iteration, solve_kkt
+from lgt_bridge.model import Model, solve_kkt
 from lgt_bridge.switches import REDO
 
 from . import constraints as _constraints
@@ -21,6 +21,7 @@ from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_error, engine_set_up
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, has_prestep
+from .iteration import newton_matrix, residual_function
 from .ode1 import ODE1States
 
 #: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
@@ -241,10 +242,9 @@ class ExudynModel(StepHooks, Model):
         K.write(P.T, P.off, P.w, q, V, 0.0, P.qpos, P.qvel)
         self.sd.SetTime(t)
         S.ComputeODE2RHS(mbs)
-        Qbar = np.empty(self.nv)
+        Qbar, Mbar = np.empty(self.nv), self.Mbar
         if P.constant_mass:
             K.forces(P.T, P.off, P.w, q, V, S.GetSystemResidual(), P.empty, Qbar, P.empty)
-            Mbar = self.Mbar
         else:
             S.ComputeMassMatrix(mbs)
             Mbar = np.empty((self.nv, self.nv))
@@ -333,7 +333,11 @@ class ExudynModel(StepHooks, Model):
         """(Q̄, g) at one state: one write for both (``Model.forces_and_constraints``)."""
         if not self.n_constraints or self.ode1 is not None or not self._compiled:
             return Model.forces_and_constraints(self, q, V, t)
-        return self._forces_compiled(q, V, t)[0], self.cons.at_written(t)
+        fast = residual_function(self)           # a constant M̄: one residual read
+        return fast(q, V, t) if fast else (self._forces_compiled(q, V, t)[0], self.cons.at_written(t))
+
+    def forces_and_constraints_function(self):
+        return residual_function(self) or self.forces_and_constraints
 
     def solve_mass(self, q, B):
         """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""
@@ -355,16 +359,11 @@ class ExudynModel(StepHooks, Model):
         body (tests/test_exudyn_iteration.py): C_t to 3e-8, K_t to 0.1 % (RotVecLG) and 4 % (EP),
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
         not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
-        for the calls at the same (q, V, t). ``sparse``: scipy.sparse matrices (products with
-        a sparse H: large models), as generalized-α asks above its sparse size; on large
-        models with a constant M̄ the Jacobians of Q_e then come from coloured differences
-        (:mod:`.iteration`) instead of Exudyn's dense system Jacobian."""
-        key = (float(t), np.asarray(q, float).tobytes(), np.asarray(V, float).tobytes(), bool(sparse))
-        cached = getattr(self, "_it_cache", None)
-        if cached is None or cached[0] != key:
-            from .iteration import newton_parts
-            cached = self._it_cache = (key, newton_parts(self, q, V, t, sparse))
-        return combine_iteration(cached[1], c_acc, c_vel, c_pos)
+        for the calls at the same (q, V, t); without rotations one Exudyn Jacobian for the
+        combination (:func:`.iteration.selected_matrix`). ``sparse``: scipy.sparse (a sparse
+        H), as generalized-α asks above its sparse size; large models with a constant M̄ take
+        coloured differences of Q_e instead of Exudyn's dense Jacobian (:mod:`.iteration`)."""
+        return newton_matrix(self, q, V, t, c_acc, c_vel, c_pos, sparse)
 
     def constraint_owners(self, rows):
         """The Exudyn objects owning the model's constraint ``rows`` (for messages)."""

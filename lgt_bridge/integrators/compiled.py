@@ -190,6 +190,11 @@ class CompiledProblem(LocalProblem):
         _k.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off, False)
         return self._q, self._V, self._p, self._W
 
+    def ga_state_args(self, sv, sp, Wa, dXa, to_local):
+        """(ga_state's kernel arguments after Ẇ, q, V): for a kernel that ends with the state
+        at its new Ẇ (genalpha's fused Newton update), and the views of q and V it writes."""
+        return (sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off, False), self._q, self._V
+
     def ga_affine(self, W, Wd, a, af, am, h, g, b, k, to_local):
         """One kernel call instead of ~10 numpy operations."""
         n, nX = len(W), len(to_local)

@@ -43,8 +43,10 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import StepFailed, Stepper
-from .genalpha_matrix import SPARSE_MIN, Kinematics, accepts, coo, csr, factorize, fd_matrix
-from .newton_control import AT_FLOOR, CONVERGED, REFRESH, tolerances, verdict
+from .genalpha_matrix import (DENSE_MAX, SPARSE_MIN, DensePattern, Kinematics, accepts, coo, csr, factorize,
+                              fd_matrix)
+from .genalpha_newton import iterate
+from .newton_control import tolerances
 
 
 # what a step's state needs besides Ẇ_{k+1}, in which it is affine:
@@ -115,6 +117,7 @@ class GenAlpha(Stepper):
         self._A_fixed = None
         self._solve = None
         self._memo = {}               # factorize's memory of J's pattern
+        self._pattern = None          # the kept pattern of a dense J (_dense_vector_matrix)
         self._lu_h = None
         self.Wd = None
         self._prev = None
@@ -323,6 +326,8 @@ class GenAlpha(Stepper):
         only: K = M + s_v C_t + s_p K_t, J = [K, Aᵀ; A s_p/(h²β) (A on velocity rows), 0],
         L = diag(M, I) in the acceleration form."""
         m, n, nc = self.prob.model, K.shape[0], self.nc
+        if isinstance(K, np.ndarray) and not self.accel_form:
+            return self._dense_vector_matrix(K, q1), None
         parts = [coo(K)]
         lparts = None
         if self.accel_form:
@@ -337,6 +342,28 @@ class GenAlpha(Stepper):
                 lparts.append((np.arange(n, n + nc), np.arange(n, n + nc), np.ones(nc)))
         shape = (n + nc, n + nc)
         return csr(shape, parts), (None if lparts is None else csr(shape, lparts))
+
+    def _dense_vector_matrix(self, K, q1):
+        """J of :meth:`_vector_matrices` from a dense K: assembled dense, then in a kept
+        sparse pattern above DENSE_MAX (:class:`.genalpha_matrix.DensePattern`)."""
+        n, nc = K.shape[0], self.nc
+        J = np.zeros((n + nc, n + nc))
+        J[:n, :n] = K
+        if nc:
+            A = self._A_fixed if self._A_fixed is not None else self._A(q1)
+            A = A.toarray() if hasattr(A, "toarray") else np.asarray(A, float)
+            J[:n, n:] = A.T
+            J[n:, :n] = A
+            if self._vel_rows is None:
+                J[n:, :n] *= self._consts.k                             # s_p/(h²β) = k
+            else:
+                pos = np.setdiff1d(np.arange(nc), self._vel_rows)        # A D_v/(hγk) = A
+                J[n + pos, :n] *= self._consts.k
+        if n + nc <= DENSE_MAX:
+            return J
+        if self._pattern is None:
+            self._pattern = DensePattern()
+        return self._pattern.csc(J)
 
     def _fd_matrix(self, Wd1, lam, t1, h):
         return fd_matrix(self, Wd1, lam, t1, h)
@@ -422,66 +449,9 @@ class GenAlpha(Stepper):
     BUDGET = 10
 
     def _newton(self, Wd1, lam, t1, h, tol, floor):
-        """Newton's updates from (Ẇ, λ) on the stored matrix, refreshed as
-        :func:`.newton_control.verdict` says: the converged (Ẇ_{k+1}, λ), or None (the
-        reason in ``_why``)."""
-        n = len(Wd1)
-        sizes, since = [], []         # the step's update sizes; those since the last refresh
-        fused = self._Mcsr is not None and self._vel_rows is None and not self._sparse_A
-        if fused:                    # one kernel per iteration: residual, solve and update
-            from ..kernels.stage import ga_force_newton
-            z = np.concatenate([Wd1, lam])
-            r = np.empty(len(z))
-            Wd1, lam = z[:n], z[n:]
-            cg = 1.0 / (h * h * self.beta)
-            m = self.prob.model
-            A = self._A_fixed
-            if A is None and self._A_const:
-                A = self._A_fixed = np.asarray(self._A(self.q), dtype=float)
-        factors = getattr(self._solve, "factors", None) if fused else None
-        for it in range(self.nmax):
-            if factors is not None:
-                q1, V1, _, _ = self._evaluate(Wd1, h)
-                self.prob.n_f += 1
-                Q, g = m.forces_and_constraints(q1, V1, t1)
-                d2 = ga_force_newton(*self._Mcsr, np.asarray(self._A(q1), dtype=float) if A is None else A,
-                                     Q, g, cg, *factors, z, r)
-                if d2 < 0.0:
-                    self._why = "diverged (non-finite residual)"
-                    return None
-                self.n_newton += 1
-                size = h * math.sqrt(d2 / n)
-            else:
-                r = self._residual(Wd1, lam, t1, h)
-                if not self._finite:
-                    self._why = "diverged (non-finite residual)"
-                    return None
-                dz = self._solve(r)
-                dW = dz[:n] if self.nc else dz
-                if fused:
-                    z -= dz
-                else:
-                    Wd1 = Wd1 - dW
-                    if self.nc:
-                        lam = lam - dz[n:]
-                self.n_newton += 1
-                # converge on the velocity change h·ΔẆ: Ẇ itself carries rounding noise
-                # of size eps/(h²β) from the scaled constraint rows
-                size = h * math.sqrt(dW.dot(dW) / n)
-            sizes.append(size)
-            since.append(size)
-            v = verdict(since, tol, floor, self.BUDGET)
-            if v is CONVERGED or v is AT_FLOOR:
-                self.n_floor += v is AT_FLOOR
-                return (Wd1.copy(), lam.copy()) if fused else (Wd1, lam)
-            if v is REFRESH:
-                self._jacobian(Wd1, lam, t1, h)
-                since = []
-                factors = getattr(self._solve, "factors", None) if fused else None
-        last = ", ".join(f"{x:.2g}" for x in sizes[-3:])
-        self._why = (f"did not converge in {self.nmax} iterations (last updates h·|ΔẆ| = {last} m/s or "
-                     f"rad/s RMS, against the tolerance {tol:.2g} and the rounding floor {floor:.2g})")
-        return None
+        """Newton's updates from (Ẇ, λ) on the stored matrix (:mod:`.genalpha_newton`): the
+        converged (Ẇ_{k+1}, λ), or None (the reason in ``_why``)."""
+        return iterate(self, Wd1, lam, t1, h, tol, floor)
 
 
 def _same(h0, h):

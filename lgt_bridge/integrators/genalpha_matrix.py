@@ -24,6 +24,7 @@ with M, C_t = -∂Q/∂V and K_t = ∂(M V̇ - Q + Aᵀλ)/∂z the model's (``i
 Every product with a block transform is formed on the model matrices' nonzeros (COO
 triples), and the whole matrix is built as one sparse matrix.
 """
+import copy
 import warnings
 
 import numpy as np
@@ -70,6 +71,32 @@ def assemble(shape, parts, sparse):
     r, c, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
     keep = v != 0
     return sp.csr_matrix((v[keep], (r[keep], c[keep])), shape=shape)
+
+
+class DensePattern:
+    """Dense matrices of one nonzero pattern as scipy CSC, the pattern's index arrays kept:
+    each matrix then costs one gather of its entries, not a conversion (a format change
+    costs ~30 µs on a 100 x 100 matrix, a fifth of a Newton matrix). A matrix with a nonzero
+    outside the kept pattern (or another shape) sets a new one; entries of the pattern that
+    are zero stay as explicit zeros (the sparse LU keeps them as structural)."""
+
+    def __init__(self):
+        self.shape = None
+
+    def csc(self, D):
+        from scipy import sparse
+        D = np.ascontiguousarray(D, dtype=float)
+        if D.shape == self.shape:
+            data = D.ravel()[self.flat]
+            if np.count_nonzero(data) == np.count_nonzero(D):
+                C = copy.copy(self.template)      # its index arrays shared (scipy's constructor
+                C.data = data                     # checks them each time: ~25 µs)
+                return C
+        C = sparse.csc_matrix(D)
+        C.sort_indices()
+        self.shape, self.indptr, self.indices, self.template = D.shape, C.indptr, C.indices, C
+        self.flat = C.indices * D.shape[1] + np.repeat(np.arange(D.shape[1]), np.diff(C.indptr))
+        return copy.copy(C)
 
 
 def accepts(fn, keyword):
@@ -193,14 +220,16 @@ def factorize(J, L=None, compiled=False, memo=None):
     Raises np.linalg.LinAlgError or RuntimeError on a singular J. ``compiled``: the block
     product and the sparse LU's solves run in kernels (scipy's matrix-vector product and
     SuperLU's solve cost ~3 µs a call, most of a Newton iteration's own work on 100
-    bodies). ``memo``: a dict kept between calls, where a pattern of J found not to fall
-    apart is remembered and not searched again."""
+    bodies), and a sparse J of at most SPARSE_MIN unknowns that a bandwidth-reducing order
+    makes narrow is factored banded (:func:`_band_solver`). ``memo``: a dict kept between
+    calls, where a pattern of J found not to fall apart, and its band order, are remembered
+    and not searched again."""
     from scipy import sparse
     dense = not sparse.issparse(J) and J.shape[0] <= DENSE_MAX
     S = None
     if not dense:
-        Jc = sparse.csr_matrix(J)
-        key = (Jc.shape, Jc.indptr.tobytes(), Jc.indices.tobytes()) if memo is not None else None
+        Jc = J if sparse.isspmatrix_csc(J) else sparse.csr_matrix(J)
+        key = (Jc.format, Jc.shape, Jc.indptr.tobytes(), Jc.indices.tobytes()) if memo is not None else None
         if key is None or memo.get("one_block") != key:
             S = _block_inverse(Jc, L)
             if S is None and key is not None:
@@ -211,8 +240,11 @@ def factorize(J, L=None, compiled=False, memo=None):
         # (a sparse J of a moderate size too: a dense J⁻¹L is a threaded BLAS-3 solve,
         # whose threads cost ~10 ms a call under load)
         from scipy.sparse.linalg import splu
-        lu = splu(sparse.csc_matrix(J))
-        solve = _lu_solver(lu) if compiled else lu.solve
+        Jc = J if sparse.isspmatrix_csc(J) else sparse.csc_matrix(J)
+        solve = _band_solver(Jc, memo) if compiled and memo is not None and J.shape[0] <= SPARSE_MIN else None
+        if solve is None:
+            lu = splu(Jc)
+            solve = _lu_solver(lu) if compiled else lu.solve
         if L is None:
             return solve
         L = sparse.csr_matrix(L)
@@ -228,22 +260,70 @@ def factorize(J, L=None, compiled=False, memo=None):
     return sla.lu_solve(lu, L.toarray() if sparse.issparse(L) else L, check_finite=False).dot
 
 
-def _lu_solver(lu):
-    """r ↦ J⁻¹ r from SuperLU's factors through the compiled triangular solves (SuperLU's
-    own solve costs ~3 µs of overhead a call)."""
+#: a band (lower + upper width) up to this fraction of the unknowns is factored banded
+BAND_FRACTION = 0.25
+
+
+def _band_solver(J, memo):
+    """r ↦ J⁻¹ r for a CSC J through the compiled banded LU (:func:`..kernels.linalg.band_lu`,
+    partial pivoting within the band) in a reverse Cuthill-McKee order of J's pattern, kept in
+    ``memo`` with its widths for later J of the same pattern; None when the band is wider
+    than BAND_FRACTION of the unknowns (a sparse LU then). On the 104-coordinate ANCF cable
+    (widths 8) a matrix costs ~15 µs against ~90 µs for SuperLU's set-up, factorization and
+    the export of its factors. Raises np.linalg.LinAlgError on a singular J."""
+    from ..kernels.linalg import band_lu
+    n = J.shape[0]
+    key = (J.shape, J.indptr.tobytes(), J.indices.tobytes())
+    band = memo.get("band")
+    if band is None or band[0] != key:
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+        P = abs(J).tocsr()
+        order = reverse_cuthill_mckee((P + P.T).tocsr(), symmetric_mode=True)
+        pinv = np.empty(n, np.int64)
+        pinv[order] = np.arange(n)
+        C = J.tocoo()
+        d = pinv[C.col] - pinv[C.row]
+        kl, ku = (int(max(0, -d.min())), int(max(0, d.max()))) if len(d) else (0, 0)
+        band = memo["band"] = (key, pinv, kl, ku) if kl + ku <= BAND_FRACTION * n else (key, None)
+    if band[1] is None:
+        return None
+    pinv, kl, ku = band[1:]
+    lp, up, perm = np.empty(n + 1, np.int64), np.empty(n + 1, np.int64), np.empty(2 * n, np.int64)
+    li, lv = np.empty(n * kl, np.int64), np.empty(n * kl)
+    ui, uv = np.empty(n * (kl + ku + 1), np.int64), np.empty(n * (kl + ku + 1))
+    ok, nl, nu = band_lu(J.indptr.astype(np.int64), J.indices.astype(np.int64),
+                         np.ascontiguousarray(J.data, dtype=float), pinv, kl, ku, lp, li, lv, up, ui, uv, perm)
+    if not ok:
+        raise np.linalg.LinAlgError("the matrix is exactly singular")
+    return _factor_solver(n, (lp, li[:nl], lv[:nl], up, ui[:nu], uv[:nu], perm))
+
+
+def _factor_solver(n, f):
+    """r ↦ J⁻¹ r through :func:`..kernels.linalg.lu_solve` on its factors ``f``."""
     from ..kernels.linalg import lu_solve
-    n = lu.shape[0]
-    L, U = lu.L, lu.U
-    f = [np.asarray(a, np.int64) if a.dtype.kind == "i" else np.ascontiguousarray(a, dtype=float)
-         for a in (L.indptr, L.indices, L.data, U.indptr, U.indices, U.data)]
-    perm = np.concatenate([lu.perm_r, lu.perm_c]).astype(np.int64)
 
     def solve(r):
         x = np.empty(n)
-        lu_solve(*f, perm, np.ascontiguousarray(r, dtype=float), x)
+        lu_solve(*f, np.ascontiguousarray(r, dtype=float), x)
         return x
-    solve.factors = (*f, perm)              # for kernels that solve inside (genalpha)
+    solve.factors = tuple(f)            # for kernels that solve inside (genalpha)
     return solve
+
+
+def _lu_solver(lu):
+    """r ↦ J⁻¹ r from SuperLU's factors through the compiled triangular solves (SuperLU's
+    own solve costs ~3 µs of overhead a call)."""
+    n = lu.shape[0]
+    L, U = lu.L, lu.U
+    # L's entries below its diagonal; U's diagonal first in each column (lu_solve's layout)
+    col = np.repeat(np.arange(n), np.diff(L.indptr))
+    below = L.indices > col
+    lp = np.concatenate([[0], np.cumsum(np.bincount(col[below], minlength=n))])
+    col = np.repeat(np.arange(n), np.diff(U.indptr))
+    order = np.lexsort((U.indices != col, col))
+    f = [np.asarray(a, np.int64) if a.dtype.kind == "i" else np.ascontiguousarray(a, dtype=float)
+         for a in (lp, L.indices[below], L.data[below], U.indptr, U.indices[order], U.data[order])]
+    return _factor_solver(n, [*f, np.concatenate([lu.perm_r, lu.perm_c]).astype(np.int64)])
 
 
 def _csr_product(S):

@@ -30,6 +30,7 @@ CONVERGED, AT_FLOOR, CONTINUE, REFRESH = "converged", "at the floor", "continue"
 THETA_MAX = 0.5
 #: the rounding floor of the Newton updates, in units of its estimate (:func:`tolerances`)
 FLOOR = 100.0
+_EPS = float(np.finfo(float).eps)
 
 
 def tolerances(W, q, newton_tol, h, beta, constrained):
@@ -45,9 +46,8 @@ def tolerances(W, q, newton_tol, h, beta, constrained):
     converged."""
     w_rms = math.sqrt(W.dot(W) / max(len(W), 1))
     tol = newton_tol * (1.0 + w_rms)
-    eps = np.finfo(float).eps
-    qmax = float(np.abs(q).max(initial=0.0))
-    floor = FLOOR * eps * ((1.0 + w_rms) + (qmax / (h * beta) if constrained else 0.0))
+    qmax = float(np.abs(q).max()) if len(q) and constrained else 0.0
+    floor = FLOOR * _EPS * ((1.0 + w_rms) + (qmax / (h * beta) if constrained else 0.0))
     return tol, max(tol, floor)
 
 

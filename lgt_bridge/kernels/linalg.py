@@ -8,7 +8,8 @@ means dense. The factor overwrites S's lower triangle with L (S = L Lᵀ), with 
 the diagonal, so that both solves multiply. The numpy reference is ``np.linalg.cholesky``
 and ``np.linalg.solve``; tests hold them equal. Plain loops: ``NUMBA_DISABLE_JIT=1`` runs
 the same source interpreted. :func:`lu_solve`: the triangular solves of a sparse LU
-factorization (SuperLU's CSC factors), without scipy's per-call overhead.
+factorization (SuperLU's CSC factors), without scipy's per-call overhead; :func:`band_lu`:
+such factors from a banded LU with partial pivoting (no sparse LU set-up per matrix).
 """
 import math
 
@@ -112,10 +113,12 @@ def envelope_solve(L, first, start, x):
 @njit(cache=True, error_model="numpy")
 def lu_solve(lp, li, lv, up, ui, uv, perm, b, x):
     """x <- the solution of A x = b from a sparse LU factorization Pr A Pc = L U (SuperLU's
-    factors as they come, CSC: ``lp, li, lv`` of L, unit diagonal, ``up, ui, uv`` of U, row
-    indices in any order) and ``perm`` = (perm_r, perm_c) stacked: Pr b has b[i] at
-    perm_r[i], and x[i] is y[perm_c[i]] for the solution y of L U y = Pr b. The numpy
-    reference is ``scipy.sparse.linalg.splu(A).solve``; tests hold them equal."""
+    factors in CSC, as ``genalpha_matrix._lu_solver`` arranges them: ``lp, li, lv`` the
+    entries of L below its unit diagonal, ``up, ui, uv`` of U with each column's diagonal
+    entry first, the others in any order) and ``perm`` = (perm_r, perm_c) stacked: Pr b has
+    b[i] at perm_r[i], and x[i] is y[perm_c[i]] for the solution y of L U y = Pr b. No
+    branch in the inner loops. The numpy reference is ``scipy.sparse.linalg.splu(A).solve``;
+    tests hold them equal."""
     n = b.shape[0]
     y = np.empty(n)
     for i in range(n):
@@ -123,17 +126,97 @@ def lu_solve(lp, li, lv, up, ui, uv, perm, b, x):
     for j in range(n):                      # L y = Pr b, column by column
         yj = y[j]
         for k in range(lp[j], lp[j + 1]):
-            if li[k] > j:
-                y[li[k]] -= lv[k] * yj
+            y[li[k]] -= lv[k] * yj
     for j in range(n - 1, -1, -1):          # U y = y, column by column from the last
-        d = 0.0
-        for k in range(up[j], up[j + 1]):
-            if ui[k] == j:
-                d = uv[k]
-        yj = y[j] / d
+        k0 = up[j]
+        yj = y[j] / uv[k0]
         y[j] = yj
-        for k in range(up[j], up[j + 1]):
-            if ui[k] < j:
-                y[ui[k]] -= uv[k] * yj
+        for k in range(k0 + 1, up[j + 1]):
+            y[ui[k]] -= uv[k] * yj
     for i in range(n):
         x[i] = y[perm[n + i]]
+
+
+@njit(cache=True, error_model="numpy")
+def band_lu(ip, ix, v, pinv, kl, ku, lp, li, lv, up, ui, uv, perm):
+    """The LU factorization with partial pivoting (LAPACK's gbtrf) of the n x n matrix B with
+    B[pinv[i], pinv[j]] = A[i, j] for A in CSC (``ip, ix, v``) whose entries all lie within
+    the band -kl <= pinv[j] - pinv[i] <= ku (a bandwidth-reducing order ``pinv``), written as
+    the factors :func:`lu_solve` takes for A itself into ``lp, li, lv, up, ui, uv, perm``
+    (lp, up: n + 1; li, lv: at least n·kl; ui, uv: at least n·(kl + ku + 1); perm: 2 n).
+    Returns (ok, number of L entries, number of U entries). Work n·kl·(kl + ku), storage
+    n·(2 kl + ku + 1), no sparse LU set-up per call. Row interchanges stay within kl rows;
+    the multipliers of each column end at the rows the later interchanges move them to (so
+    that Pr A Pc = L U). Not ok (a column without a nonzero pivot): a singular matrix. The
+    numpy reference is ``scipy.sparse.linalg.splu``; tests hold the solutions equal."""
+    n = pinv.shape[0]
+    W = np.zeros((n, 2 * kl + ku + 1))        # row i holds columns i - kl .. i + kl + ku
+    for jj in range(n):
+        j = pinv[jj]
+        for k in range(ip[jj], ip[jj + 1]):
+            i = pinv[ix[k]]
+            W[i, j - i + kl] += v[k]
+    piv = np.empty(n, np.int64)
+    for k in range(n):
+        last = min(n - 1, k + kl)
+        p, big = k, abs(W[k, kl])
+        for i in range(k + 1, last + 1):
+            a = abs(W[i, k - i + kl])
+            if a > big:
+                p, big = i, a
+        piv[k] = p
+        if big == 0.0:
+            return False, 0, 0
+        width = min(n - 1, k + kl + ku) - k + 1          # columns k .. k + width - 1
+        Wk = W[k]
+        if p != k:
+            Wp, c = W[p], k - p + kl
+            for t in range(width):
+                a = Wk[kl + t]
+                Wk[kl + t] = Wp[c + t]
+                Wp[c + t] = a
+        d = Wk[kl]
+        for i in range(k + 1, last + 1):
+            Wi, c = W[i], k - i + kl
+            m = Wi[c] / d
+            Wi[c] = m
+            if m != 0.0:
+                for t in range(1, width):
+                    Wi[c + t] -= m * Wk[kl + t]
+    # L by columns from the last: sigma[r] is where the interchanges after column j move row r
+    sigma = np.arange(n)
+    nl = 0
+    for j in range(n - 1, -1, -1):
+        for i in range(j + 1, min(n - 1, j + kl) + 1):
+            if W[i, j - i + kl] != 0.0:
+                li[nl] = sigma[i]
+                lv[nl] = W[i, j - i + kl]
+                nl += 1
+        lp[j] = nl                            # the count after column j (reversed below)
+        a = sigma[j]                          # then the interchange of column j itself
+        sigma[j] = sigma[piv[j]]
+        sigma[piv[j]] = a
+    for x in range(nl // 2):                  # columns in order (rows within one: any order)
+        y = nl - 1 - x
+        li[x], li[y] = li[y], li[x]
+        lv[x], lv[y] = lv[y], lv[x]
+    for j in range(n):
+        lp[j] = nl - lp[j]
+    lp[n] = nl
+    k = 0
+    up[0] = 0
+    for j in range(n):
+        ui[k] = j                             # the diagonal first
+        uv[k] = W[j, kl]
+        k += 1
+        for i in range(max(0, j - kl - ku), j):
+            if W[i, j - i + kl] != 0.0:
+                ui[k] = i
+                uv[k] = W[i, j - i + kl]
+                k += 1
+        up[j + 1] = k
+    for i in range(n):
+        perm[i] = sigma[pinv[i]]              # row i of A: row pinv[i] of B, moved by every interchange
+        perm[n + i] = pinv[i]
+    return True, nl, k
+

@@ -458,12 +458,15 @@ def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
 
 
 @njit(cache=True, error_model="numpy")
-def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r):
+def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
+                    sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
     """One Newton update of generalized-α's residual in forces with a constant mass matrix
     (CSR ``mp, mi, mv``) and no SE(3) body: r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (A
     dense, nc x n), then z -= J⁻¹ r with the sparse LU factors of J (:func:`.linalg.lu_solve`'s
-    arguments). Returns |ΔẆ|², or -1 when r is not finite (z untouched). The numpy
-    reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
+    arguments), then the state at the new Ẇ into the work array (:func:`ga_state`'s
+    arguments after Ẇ: the next update's model call reads it; one kernel call less an
+    update). Returns |ΔẆ|², or -1 when r is not finite (z and the state untouched). The
+    numpy reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
     tests hold them equal."""
     n, nc = Q.shape[0], g.shape[0]
     s = 0.0
@@ -488,4 +491,5 @@ def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r)
         z[i] -= dz[i]
         if i < n:
             d2 += dz[i] * dz[i]
+    ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
     return d2

@@ -307,6 +307,34 @@ def test_factorize_solves_J_z_equals_L_r(n, coupled, rng):
     Js[3, :] = 0.0
     with pytest.raises((np.linalg.LinAlgError, RuntimeError)):
         gm.factorize(Js.tocsr(), L)
+    for compiled in (False, True):                # a CSC J (DensePattern's) as it comes, memo kept
+        memo = {}
+        for _ in range(2):
+            got = gm.factorize(J.tocsc(), LL if compiled else L, compiled, memo)(r)
+            np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-12)
+
+
+def test_dense_pattern_gives_each_matrix_in_the_kept_pattern(rng):
+    """DensePattern.csc equals the dense matrix; the pattern is kept while the nonzeros stay
+    inside it (zeros inside it kept explicit), and set anew for a
+    nonzero outside it or another shape."""
+    p = gm.DensePattern()
+    D = np.diag(rng.normal(size=8) + 3.0)
+    D[0, 5] = D[6, 1] = 1.5
+    first = p.csc(D)
+    np.testing.assert_array_equal(first.toarray(), D)
+    E = D * 2.0
+    E[0, 5] = 0.0                                              # a zero inside the pattern
+    second = p.csc(E)
+    assert second.format == "csc" and second.nnz == first.nnz
+    np.testing.assert_array_equal(second.indices, first.indices)
+    np.testing.assert_array_equal(second.toarray(), E)
+    F = D.copy()
+    F[2, 7] = 4.0                                              # outside the pattern: a new one
+    third = p.csc(F)
+    np.testing.assert_array_equal(third.toarray(), F)
+    assert third.nnz == first.nnz + 1 and len(p.indices) == third.nnz
+    np.testing.assert_array_equal(p.csc(np.eye(3)).toarray(), np.eye(3))
 
 
 # --- failures ------------------------------------------------------------------------------

@@ -97,3 +97,38 @@ def test_lu_solve_equals_superlu(n, density):
     ref = lu.solve(b)
     assert np.abs(x - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
     assert np.abs(A @ x - b).max() <= 1e-10 * (1.0 + np.abs(b).max()) * (1.0 + np.abs(x).max())
+
+
+@pytest.mark.parametrize("n", [60, 106])
+def test_band_lu_solves_like_superlu(n):
+    """The banded LU (kernels.linalg.band_lu, through genalpha_matrix._band_solver) on a
+    banded matrix with a saddle-point block (zero diagonal: pivoting needed) given in a
+    scrambled order: its solution equals SuperLU's (the reference) and solves A x = b; the
+    band order is kept for a matrix of the same pattern; a singular matrix raises, and a
+    pattern too wide for a band gives None."""
+    from scipy import sparse
+    from scipy.sparse.linalg import splu
+    from lgt_bridge.integrators.genalpha_matrix import _band_solver
+    rng = np.random.default_rng(n)
+    K = sparse.diags([rng.normal(size=n - abs(k)) for k in range(-3, 4)], list(range(-3, 4)), format="lil")
+    C = sparse.csr_matrix((np.ones(2), ([0, 1], [0, 1])), shape=(2, n))
+    P = rng.permutation(n + 2)
+    memo = {}
+    for _ in range(2):
+        K.setdiag(rng.normal(size=n))
+        A = sparse.bmat([[K, C.T], [C, None]]).tocsc()[P][:, P].tocsc()
+        solve = _band_solver(A, memo)
+        b = rng.normal(size=n + 2)
+        ref = splu(A).solve(b)
+        assert np.abs(solve(b) - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
+        assert np.abs(A @ solve(b) - b).max() <= 1e-10 * (1.0 + np.abs(ref).max())
+    kl, ku = memo["band"][2:]
+    assert kl + ku <= 14                                  # the band the order found (2 x 7 at most)
+    S = A.tolil()
+    S[P.tolist().index(5), :] = 0.0                       # row 5 of the unscrambled matrix
+    S = S.tocsc()
+    S.eliminate_zeros()
+    with pytest.raises(np.linalg.LinAlgError):
+        _band_solver(S, {})
+    D = sparse.csc_matrix(rng.normal(size=(n, n)))
+    assert _band_solver(D, {}) is None

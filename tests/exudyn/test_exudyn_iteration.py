@@ -80,3 +80,26 @@ def test_genalpha_on_the_analytic_matrix_matches_the_finite_difference_one(node,
     assert np.abs(analytic.q[-1] - fd.q[-1]).max() < 1e-7 * scale
     assert np.abs(analytic.V[-1] - fd.V[-1]).max() < 1e-6 * np.abs(fd.V[-1]).max()
     assert analytic.stats["n_f"] < fd.stats["n_f"]
+
+
+def test_one_jacobian_combination_equals_the_separate_jacobians():
+    """Without rotation coordinates (an ANCF cable with axial and bending damping: both C_t
+    and K_t) a combination c_acc M̄ + c_vel C_t + c_pos K_t is one Exudyn Jacobian call
+    (iteration.selected_matrix): it equals M̄, C_t and K_t from Exudyn's two separate
+    Jacobians (iteration.newton_parts) combined, to rounding."""
+    from lgt_exudyn.iteration import newton_parts, selected_matrix
+    from exudyn_solver_models import ancf_cable_damped
+    mbs, _, _ = ancf_cable_damped()
+    m = ExudynModel(mbs)
+    rng = np.random.default_rng(5)
+    q, V, t = m.q0 + 0.05 * rng.normal(size=m.nv), rng.normal(size=m.nv), 0.02
+    M, C, K = newton_parts(m, q, V, t, False)
+    assert np.abs(C).max() > 0 and np.abs(K).max() > 0
+    for c in ((1.0, 0.3, 0.02), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (2.0, -3.0, 5.0)):
+        one = selected_matrix(m, q, V, t, *c, False)
+        ref = c[0] * M + c[1] * C + c[2] * K
+        assert np.abs(one - ref).max() <= 1e-13 * np.abs(ref).max()
+        assert np.abs(m.iteration_matrix(q, V, t, *c) - ref).max() <= 1e-13 * np.abs(ref).max()
+    sparse = selected_matrix(m, q, V, t, 1.0, 0.3, 0.02, True)
+    assert np.abs(sparse.toarray() - (M + 0.3 * C + 0.02 * K)).max() <= 1e-13 * np.abs(K).max()
+    assert selected_matrix(m, q, V, t, 1.0, 0.0, 0.0, False) is None        # M̄ alone: no Jacobian

@@ -163,6 +163,30 @@ def test_compiled_forces_and_iteration_matrix_equal_the_numpy_backend(built, rng
         for c in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)):
             assert close(m.iteration_matrix(q, V, t, *c), ref.iteration_matrix(q, V, t, *c), 1e-12)
 
+def test_bound_forces_and_constraints_equal_the_numpy_backend(built, rng):
+    """forces_and_constraints_function (lgt_exudyn.iteration.residual_function on the compiled
+    path with a constant M̄ and constraints: one residual read for Q̄ and g) and
+    forces_and_constraints itself against the numpy reference backend's forces and
+    constraints_at, at random states; elsewhere the function is the method itself."""
+    from lgt_exudyn.iteration import residual_function
+    SC, m, P = built
+    ref = ExudynModel(m.mbs, backend="numpy")
+    fast = residual_function(m)
+    assert residual_function(ref) is None
+    if not m.n_constraints or not P.constant_mass:
+        assert fast is None
+        assert m.forces_and_constraints_function() == m.forces_and_constraints
+        return
+    assert fast is not None and m.forces_and_constraints_function() is fast
+    for q, V, t in em.random_states(m, rng, n=2):
+        Q, g = ref.forces(q, V, t), ref.constraints_at(q, t)
+        n = m.n_eval
+        for got in (fast(q, V, t), m.forces_and_constraints(q, V, t)):
+            assert close(got[0], Q, 1e-13)
+            assert np.abs(got[1] - g).max() <= 1e-13 * max(1.0, np.abs(q).max())
+        assert m.n_eval == n + 2
+
+
 SPECIAL = {"driven cart, ∂g/∂t from Exudyn": ("driven_cart_pendulum", {}),
            "driven cart, ∂g/∂t by the bridge": ("driven_cart_pendulum", {"with_t": False}),
            "moving frame": ("moving_frame_pendulum", {}),

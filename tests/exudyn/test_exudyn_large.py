@@ -189,7 +189,8 @@ def test_ancf_genalpha_in_forces_equals_the_numpy_backend():
     assert np.abs(fast.V[-1] - ref.V[-1]).max() <= 1e-8 * max(1.0, np.abs(ref.V[-1]).max())
 
 
-def test_ancf_genalpha_matrix_is_the_jacobian_of_its_residual():
+@pytest.mark.parametrize("elements", [6, 20])          # 30 unknowns: dense J; 86: sparse (CSC)
+def test_ancf_genalpha_matrix_is_the_jacobian_of_its_residual(elements):
     """On vector coordinates only the Newton matrix is the model's M̄ + s_v C_t + s_p K_t with
     A's rows and columns (one iteration_matrix call; Exudyn's Jacobians indexed without H):
     against central differences of the stepper's residual in (Ẇ, λ). Exudyn's ANCF Jacobians
@@ -198,7 +199,7 @@ def test_ancf_genalpha_matrix_is_the_jacobian_of_its_residual():
     from lgt_bridge.simulate import make_stepper
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        m = ExudynModel(scenes.ancf_pendulum(6)[1])
+        m = ExudynModel(scenes.ancf_pendulum(elements)[1])
     h = 1e-3
     ga, _ = make_stepper(m, "genalpha", "SO3xR3", "exp", dt=h)
     ga.set_state(m.q0, m.V0)
