@@ -22,7 +22,9 @@ assembled.
 - a wheel of a mecanum car on its own (Exudyn's mecanumWheelRollingDiscTest.py): an
   ObjectConnectorRollingDiscPenalty with a 45° friction angle, rolling and slipping
   sideways, whose friction reads the slip velocity its PostNewton stored at the last step's
-  end: the states move at every step without switching.
+  end: the states move at every step without switching;
+- a hanger sliding along an ANCF cable through an ObjectJointSliding2D (Exudyn's
+  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate.
 """
 import numpy as np
 
