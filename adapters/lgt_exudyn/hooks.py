@@ -33,6 +33,7 @@ class StepHooks:
             self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
             refuse_impact_models(mbs)
+            refuse_sliding_joints(mbs)
         elif _contact.count(mbs):
             self.switch_mode = _contact.ContactModes(self)
 
@@ -259,6 +260,26 @@ def refuse_impact_models(mbs):
                 "the step sequence and lgt_bridge's steps would not converge to Exudyn's solution. Run "
                 "this model with Exudyn's own exu.SolveDynamic, or use impactModel = 0 with "
                 "contactDamping for the dissipation.")
+
+
+def refuse_sliding_joints(mbs):
+    """InputError before any step for ObjectJointSliding2D: its third algebraic coordinate is
+    not a Lagrange multiplier but the sliding coordinate s along the cable (relative to the
+    start-of-step value in its data coordinate 1), fixed by an index-1 equation (the force
+    along the cable vanishes, or the gap along the slope does). lgt_bridge integrates the ODE2
+    coordinates with every AE coordinate a multiplier: s would stay frozen at its
+    start-of-step value, the joint pinned to one point of the cable (Exudyn's
+    ANCFslidingJoint2D.py: the step size fell to 1e-8 s in the first millisecond, and
+    ANCFslidingAndALEjointTest.py ran past 90 s)."""
+    for k in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        if str(o.get("objectType", "")).removeprefix("Object") == "JointSliding2D":
+            raise InputError(
+                f"Exudyn object {k} {o.get('name', '')!r} (ObjectJointSliding2D): its algebraic "
+                "coordinates hold the sliding coordinate s along the cable next to its two Lagrange "
+                "multipliers; lgt_bridge treats every algebraic coordinate as a multiplier and cannot "
+                "move s, so the joint would stay pinned to one point of the cable. Run this model with "
+                "Exudyn's own exu.SolveDynamic.")
 
 
 def general_contacts(mbs, located=True):

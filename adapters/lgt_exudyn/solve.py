@@ -22,7 +22,7 @@ from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
 from .engine import engine_error
-from .hooks import general_contacts
+from .hooks import general_contacts, refuse_sliding_joints
 from .model import ExudynModel
 
 _noted = set()          # one-time notes already printed in this process
@@ -137,6 +137,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         simulationSettings = exu.SimulationSettings()
     if not getattr(mbs, "systemIsConsistent", False) and autoAssemble:
         mbs.Assemble()
+    refuse_sliding_joints(mbs)          # before the constraint rows are classified (and noted)
     model = ExudynModel(mbs, simulationSettings)
     ti = simulationSettings.timeIntegration
     t0, t1, n = float(ti.startTime), float(ti.endTime), int(ti.numberOfSteps)

@@ -22,7 +22,9 @@ assembled.
 - a wheel of a mecanum car on its own (Exudyn's mecanumWheelRollingDiscTest.py): an
   ObjectConnectorRollingDiscPenalty with a 45° friction angle, rolling and slipping
   sideways, whose friction reads the slip velocity its PostNewton stored at the last step's
-  end: the states move at every step without switching.
+  end: the states move at every step without switching;
+- a hanger sliding along an ANCF cable through an ObjectJointSliding2D (Exudyn's
+  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate.
 """
 import numpy as np
 
@@ -251,3 +253,40 @@ def penalty_wheel(t_end=0.2, n=100):
     s.timeIntegration.discontinuous.iterationTolerance = 0.1
     s.timeIntegration.discontinuous.ignoreMaxIterations = False
     return mbs, s, node
+
+
+def slider_on_cable(t_end=0.05, n=100):
+    """(mbs, settings, rigid node): a 2 m steel wire of three Cable2D elements, clamped at its
+    left end, and a 0.12 kg hanger (RigidBody2D) riding on it through an ObjectJointSliding2D
+    (MarkerBodyCable2DCoordinates per element, a NodeGenericData [element, sliding coordinate]),
+    pushed along by a tenth of its weight (Exudyn's ANCFslidingJoint2D.py)."""
+    from exudyn.utilities import (Cable2D, MarkerBodyCable2DCoordinates, MarkerBodyPosition, Point2DS1,
+                                  Rigid2D, RigidBody2D, ObjectJointSliding2D)
+    mbs, L, n_el, g = _system(), 2.0, 3, 9.81
+    E, A, I, rho = 2.07e11, 1e-6, 1e-12 / 12, 7800
+    le = L / n_el
+    ground = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    nodes = [mbs.AddNode(Point2DS1(referenceCoordinates=[i * le, 0, 1, 0])) for i in range(n_el + 1)]
+    cables = []
+    for i in range(n_el):
+        c = mbs.AddObject(Cable2D(physicsLength=le, physicsMassPerLength=rho * A, physicsBendingStiffness=E * I,
+                                  physicsAxialStiffness=E * A, nodeNumbers=[nodes[i], nodes[i + 1]]))
+        mbs.AddLoad(Gravity(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=c)), loadVector=[0, -g, 0]))
+        cables.append(c)
+    for c in (0, 1, 3):
+        mbs.AddObject(CoordinateConstraint(markerNumbers=[
+            mg, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
+    a, m = 0.1, 0.12
+    s0 = 1.5 * le
+    node = mbs.AddNode(Rigid2D(referenceCoordinates=[s0, -a, 0]))
+    body = mbs.AddObject(RigidBody2D(physicsMass=m, physicsInertia=m / 12 * (2 * a) ** 2, nodeNumber=node))
+    top = mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[0, a, 0]))
+    mbs.AddLoad(Force(markerNumber=mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[0, 0, 0])),
+                      loadVector=[0.1 * m * g, -m * g, 0]))
+    markers = [mbs.AddMarker(MarkerBodyCable2DCoordinates(bodyNumber=c)) for c in cables]
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[1, s0], numberOfDataCoordinates=2))
+    mbs.AddObject(ObjectJointSliding2D(markerNumbers=[top, markers[1]], slidingMarkerNumbers=markers,
+                                       slidingMarkerOffsets=[i * le for i in range(n_el)], nodeNumber=data))
+    mbs.Assemble()
+    return mbs, settings(t_end, n), node
