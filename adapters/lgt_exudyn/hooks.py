@@ -32,6 +32,7 @@ class StepHooks:
             s = settings if settings is not None else engine.exu.SimulationSettings()
             self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
+            note_lagged_objects(mbs)
             refuse_impact_models(mbs)
             refuse_sliding_joints(mbs)
         elif _contact.count(mbs):
@@ -200,7 +201,7 @@ LAGGED_OBJECTS = {"ConnectorRollingDiscPenalty": "its friction force acts along 
 def gap_rows(mbs):
     """Indices, among the system's data coordinates, of the contact gaps (the GAP_OBJECTS'
     data); the other data coordinates (tangential and impact velocities, plastic overlaps)
-    are not switches when they change sign. A ModelNote names each LAGGED_OBJECTS object."""
+    are not switches when they change sign."""
     sd, rows = mbs.systemData, []
     for k in range(sd.NumberOfObjects()):
         o = mbs.GetObject(k)
@@ -210,13 +211,20 @@ def gap_rows(mbs):
                 rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[GAP_OBJECTS[kind]]))
             except Exception:
                 pass
+    return np.array(rows, int)
+
+
+def note_lagged_objects(mbs):
+    """A ModelNote naming each LAGGED_OBJECTS object of the system."""
+    for k in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        kind = str(o.get("objectType", "")).removeprefix("Object")
         if kind in LAGGED_OBJECTS:
             warnings.warn(ModelNote(
                 f"Exudyn object {k} {o.get('name', '')!r} (Object{kind}): {LAGGED_OBJECTS[kind]}, so its "
                 "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
                 "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
                 "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
-    return np.array(rows, int)
 
 
 def mode_rows(mbs):

@@ -86,7 +86,8 @@ class CompiledProblem(LocalProblem):
             if bad:
                 from ..errors import InputError
                 raise InputError(f"engine_velocity: bodies {bad} are not rigid bodies with a position "
-                                 f"in the model's layout ({self.layout.nbodies} bodies)")
+                                 f"in the model's layout ({self.layout.nbodies} bodies); list only indices "
+                                 "of layout.bodies whose twist has six entries (rotation-only bodies take V as is)")
             bt, off = _k.with_engine(self.bt, self.off, [row[b] for b in bodies])
             got = self._engine_I[bodies] = _k.pack_tables(bt, self.vt, off)
         return got

@@ -23,34 +23,32 @@ def _position(mbs, node):
     return np.array(mbs.GetNodeOutput(node, exu.OutputVariableType.Position))
 
 
-def test_penalty_wheel_genalpha_takes_exudyns_steps_and_its_result():
-    """genalpha at Exudyn's 100 steps: 100 steps (no cut) and Exudyn's own generalized-α's
-    position at the same steps to 1e-6 (measured 3.6e-7; cutting every step, it was 3e-6)."""
+def _exudyn_and_bridge(method):
+    """(Exudyn's own position at the end, the bridge's, the bridge's statistics) of the wheel."""
     mbs, s, node = penalty_wheel()
     mbs.SolveDynamic(s, showHints=False)
     ref = _position(mbs, node)
     mbs, s, node = penalty_wheel()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ModelNote)
-        SolveDynamic(mbs, s, method="genalpha")
-    st = mbs.sys["lgtBridgeStats"]
+        SolveDynamic(mbs, s, method=method)
+    return ref, _position(mbs, node), mbs.sys["lgtBridgeStats"]
+
+
+def test_penalty_wheel_genalpha_takes_exudyns_steps_and_its_result():
+    """genalpha at Exudyn's 100 steps: 100 steps (no cut) and Exudyn's own generalized-α's
+    position at the same steps to 1e-6 (measured 3.6e-7; cutting every step, it was 3e-6)."""
+    ref, x, st = _exudyn_and_bridge("genalpha")
     assert st["success"] and st["n_steps"] == 100
-    assert np.abs(_position(mbs, node) - ref).max() < 1e-6
+    assert np.abs(x - ref).max() < 1e-6
 
 
 def test_penalty_wheel_adaptive_runs_at_its_own_steps():
     """dopri5 at the script's settings: a few hundred steps (3750 when every move was a switch),
     within the step dependence the note announces of Exudyn's result (measured 1.1e-5 m)."""
-    mbs, s, node = penalty_wheel()
-    mbs.SolveDynamic(s, showHints=False)
-    ref = _position(mbs, node)
-    mbs, s, node = penalty_wheel()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ModelNote)
-        SolveDynamic(mbs, s, method="dopri5")
-    st = mbs.sys["lgtBridgeStats"]
+    ref, x, st = _exudyn_and_bridge("dopri5")
     assert st["success"] and st["n_steps"] < 500
-    assert np.abs(_position(mbs, node) - ref).max() < 1e-4
+    assert np.abs(x - ref).max() < 1e-4
 
 
 def test_a_lagged_force_is_named_when_the_model_is_wrapped():

@@ -168,23 +168,7 @@ def general_contact_spheres(k=1e4, d=10.0):
     generalContactSpheresTest and the triangle-mesh tests write it), falling at 1 m/s under
     gravity from 0.25 and 0.55 m: the first touches the floor at t ≈ 0.1 s and settles, the
     second bounces. Returns (mbs, settings)."""
-    mbs = _system()
-    gc = mbs.AddGeneralContact()
-    gc.verboseMode = 0
-    for i in range(2):
-        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.3 * i, 0.25 + 0.3 * i, 0], initialVelocities=[0, -1, 0]))
-        mbs.AddObject(MassPoint(mass=0.1, nodeNumber=nd))
-        mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
-        mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -0.981, 0]))
-        gc.AddSphereWithMarker(mk, radius=0.1, contactStiffness=k, contactDamping=d, frictionMaterialIndex=0)
-    ground = mbs.AddObject(ObjectGround())
-    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
-    gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=mg, contactStiffness=k, contactDamping=d,
-                                  frictionMaterialIndex=0, pointList=[[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
-                                  triangleList=[[0, 2, 1], [0, 3, 2]])
-    gc.SetFrictionPairings(0.0 * np.eye(1))
-    gc.SetSearchTreeCellSize(numberOfCells=[4, 4, 4])
-    mbs.Assemble()
+    mbs = _spheres_on_floor([[0.3 * i, 0.25 + 0.3 * i, 0] for i in range(2)], k, d)
     return mbs, settings(0.5, 500)
 
 
@@ -353,12 +337,22 @@ def general_contact_column(n=3, k=1e4, d=10.0, t_end=0.4, steps=400):
     MarkerNodePosition, sphere-sphere contact on): dropped at 1 m/s, 0.25 m apart, away from
     the floor's diagonal edge; the lowest bounces on the floor and knocks the others up.
     Returns (mbs, settings); heights in ``COLUMN`` (x = 0.5, z = 0.2 for all)."""
+    mbs = _spheres_on_floor([[0.5, COLUMN["y0"] + COLUMN["dy"] * i, 0.2] for i in range(n)], k, d)
+    return mbs, settings(t_end, steps)
+
+
+COLUMN = dict(y0=0.15, dy=0.25)
+
+
+def _spheres_on_floor(positions, k, d):
+    """The assembled system: mass points (0.1 kg) at ``positions`` falling at 1 m/s under
+    gravity, as spheres (r = 0.1) of one GeneralContact with a floor of two triangles
+    (contact stiffness k, damping d, no friction)."""
     mbs = _system()
     gc = mbs.AddGeneralContact()
     gc.verboseMode = 0
-    for i in range(n):
-        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.5, COLUMN["y0"] + COLUMN["dy"] * i, 0.2],
-                                   initialVelocities=[0, -1, 0]))
+    for p in positions:
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=list(p), initialVelocities=[0, -1, 0]))
         mbs.AddObject(MassPoint(mass=0.1, nodeNumber=nd))
         mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
         mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0, -0.981, 0]))
@@ -371,7 +365,4 @@ def general_contact_column(n=3, k=1e4, d=10.0, t_end=0.4, steps=400):
     gc.SetFrictionPairings(0.0 * np.eye(1))
     gc.SetSearchTreeCellSize(numberOfCells=[4, 4, 4])
     mbs.Assemble()
-    return mbs, settings(t_end, steps)
-
-
-COLUMN = dict(y0=0.15, dy=0.25)
+    return mbs
