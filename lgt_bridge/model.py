@@ -238,6 +238,12 @@ class Model:
         """Put the state into the engine (sensors, viewers); nothing for pure-numpy models."""
 
     @property
+    def step_write_back(self):
+        """True when :meth:`write_back` must run after every step (False: only where the run
+        stops or outputs, which lets the compiled step loop run on between them)."""
+        return type(self).write_back is not Model.write_back
+
+    @property
     def has_mass_matrix(self):
         """True when the model gives both M(q) and Q(q, V, t) (the index-3 residual form)."""
         return (type(self).mass_matrix is not Model.mass_matrix

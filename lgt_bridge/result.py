@@ -1,4 +1,5 @@
 """What a run returns: :class:`SimulationResult`."""
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -55,3 +56,26 @@ class SimulationResult:
         if not self.success:
             raise StepError(self.message)
         return self
+
+
+def collect(sim, ts, qs, Vs, success, message, wall0, n_steps0, tracker=None):
+    """The :class:`SimulationResult` of one :meth:`Simulation.run <lgt_bridge.Simulation.run>`
+    of ``sim`` from its outputs (``wall0``, ``n_steps0``: the wall clock and step count at
+    its start; ``tracker``: its events, if any): the run's statistics, the largest constraint
+    residual at the outputs of a run without projection."""
+    wall = time.perf_counter() - wall0
+    sim.wall_s += wall
+    stats = sim.stats()
+    stats.update(n_steps=sim.n_steps - n_steps0, wall_s=wall)
+    model = sim.model
+    if sim.stepper.projector is None and model.n_constraints and qs:
+        rows = model.position_rows
+        stats["constraint_residual"] = float(max(
+            (np.abs(model.constraints_at(q, t)[rows]).max() if len(rows) else 0.0)
+            for t, q in zip(ts, qs)))
+    nq, nv = model.layout.nq, model.layout.nv
+    res = SimulationResult(np.array(ts), np.array(qs).reshape(-1, nq), np.array(Vs).reshape(-1, nv),
+                           success, message, stats, sim.method, sim.group, sim.chart)
+    if tracker is not None:
+        res.t_events, res.q_events, res.V_events = tracker.close()
+    return res

@@ -31,7 +31,7 @@ from .integrators.constraints import Projector, note_initial_projection, project
 from .integrators.problem import make_problem
 from .lgt import DEFAULT_GROUP
 from .progress import simulation_bar
-from .result import SimulationResult
+from .result import SimulationResult, collect
 from .validation import check_options, check_state, check_t_eval
 
 
@@ -98,6 +98,9 @@ class Simulation:
 
     #: redos of one short step when the model's discontinuous states keep changing
     MAX_DISCONTINUOUS = 5
+    #: the embedded pairs on compiled kernels step in the compiled step loop (False: the
+    #: Python loop, the reference the tests hold it equal to)
+    _use_loop = True
 
     def __init__(self, model, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp", dt=None, rtol=1e-6,
                  atol=1e-8, t0=0.0, t_end=None, q0=None, V0=None, max_steps=1_000_000, project=True,
@@ -281,18 +284,38 @@ class Simulation:
         else:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):
-                raise StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+                raise self._too_small(underflow=True)
         if (self.h < self.min_step and self.h < h_before
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
-            raise StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
-                             f"{self.min_step_name} = {self.min_step:g}: "
-                             + (self._singular_configuration() or self.min_step_why))
+            raise self._too_small()
+
+    def _too_small(self, underflow=False):
+        """The StepFailed of a step size below what the run allows (1e-14 t, min_step)."""
+        if underflow:
+            return StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
+        return StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
+                          f"{self.min_step_name} = {self.min_step:g}: "
+                          + (self._singular_configuration() or self.min_step_why))
 
     #: a singular value of the constraint Jacobian below this fraction of the largest (and
     #: not already at the start) marks a singular configuration
     SINGULAR_RATIO = 1e-3
     #: the run's step budget is checked every BUDGET_WINDOW accepted steps
     BUDGET_WINDOW = 1000
+
+    def _steps_until(self, stop, on_step):
+        """Steps toward t_end until t reaches ``stop`` (to 1e-12 relative): the embedded
+        pairs on compiled kernels in the compiled step loop (:mod:`.integrators.compiled_loop`,
+        the same steps), else :meth:`_step` by :meth:`_step`."""
+        loop = None
+        if self._use_loop and getattr(self.stepper.prob, "compiled", False):
+            from .integrators import compiled_loop          # (imports numba: not on the numpy backend)
+            loop = compiled_loop.of(self)
+        if loop is not None:
+            return loop.run(self, stop, on_step)
+        tol = 1e-12 * max(1.0, abs(stop))
+        while self.t < stop - tol:
+            self._step(self.t_end, on_step)
 
     def _singular_configuration(self):
         return _diagnosis.singular_configuration(self)
@@ -341,8 +364,7 @@ class Simulation:
                 self._step(target, on_step)
             return st.q, st.V
         tol = 1e-12 * max(1.0, abs(target))
-        while self.t < target - tol:
-            self._step(self.t_end, on_step)
+        self._steps_until(target, on_step)
         if abs(self.t - target) <= tol or st.dense is None:
             return st.q, st.V
         return st.dense(target)
@@ -374,8 +396,7 @@ class Simulation:
         if not self.dense:
             return (1, *(np.array(x, ndmin=2) for x in self._advance_to(targets[0], on_step)))
         st, first = self.stepper, targets[0]
-        while self.t < first - 1e-12 * max(1.0, abs(first)):
-            self._step(self.t_end, on_step)
+        self._steps_until(first, on_step)
         t, tol = self.t, 1e-12 * max(1.0, abs(self.t))
         n = 1 if st.dense is None else max(1, int(targets.searchsorted(t + tol, "right")))
         k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
@@ -436,7 +457,10 @@ class Simulation:
             bar.step()
 
         success, message = True, "reached the end of t_span"
-        hook = on_step if tracker is None else tracker.hook(on_step)
+        if tracker is not None:
+            hook = tracker.hook(on_step)
+        else:               # (None: nothing to do after a step, which lets the steps run on)
+            hook = on_step if (record_all or bar.mode is not None) else None
         try:
             if not record_all:          # the outputs within a step in one dense call
                 targets, i = np.asarray(targets, float), 0
@@ -457,29 +481,11 @@ class Simulation:
             bar.close()
             if exc.error is ChartDomainError:
                 err = ChartDomainError(str(exc))
-                err.result = self._result(ts, qs, Vs, False, str(exc), wall0, n_steps0, tracker)
+                err.result = collect(self, ts, qs, Vs, False, str(exc), wall0, n_steps0, tracker)
                 raise err from None
             success, message = False, str(exc)
         bar.close()
-        return self._result(ts, qs, Vs, success, message, wall0, n_steps0, tracker)
-
-    def _result(self, ts, qs, Vs, success, message, wall0, n_steps0, tracker=None):
-        wall = time.perf_counter() - wall0
-        self.wall_s += wall
-        stats = self.stats()
-        stats.update(n_steps=self.n_steps - n_steps0, wall_s=wall)
-        model = self.model
-        if self.stepper.projector is None and model.n_constraints and qs:
-            rows = model.position_rows
-            stats["constraint_residual"] = float(max(
-                (np.abs(model.constraints_at(q, t)[rows]).max() if len(rows) else 0.0)
-                for t, q in zip(ts, qs)))
-        nq, nv = model.layout.nq, model.layout.nv
-        res = SimulationResult(np.array(ts), np.array(qs).reshape(-1, nq), np.array(Vs).reshape(-1, nv),
-                               success, message, stats, self.method, self.group, self.chart)
-        if tracker is not None:
-            res.t_events, res.q_events, res.V_events = tracker.close()
-        return res
+        return collect(self, ts, qs, Vs, success, message, wall0, n_steps0, tracker)
 
 
 __all__ = ["Simulation", "SimulationResult", "make_stepper"]

@@ -223,6 +223,11 @@ class PinocchioModel(Model):
         self.branch_switches, self.singular_passages = [], []        # of this run
         return self._closed(q0, V0, t0)
 
+    @property
+    def step_write_back(self):
+        """write_back watches constrained runs only."""
+        return self.n_constraints > 0
+
     def write_back(self, q, V, t):
         """After each step of a constrained run: watch for passages near a singular configuration
         of the constraints (A's smallest singular value below SINGULAR_TOL of its largest), where

@@ -82,13 +82,19 @@ def build_f(m, kernels):
         engine = None
         aba = pin.aba
 
-    def f_engine(q, v, t):
-        tau = tau_c
-        if tau_call:
-            tau = tau(t, q, v)
-            if type(tau) is not ndarray or tau.dtype is not F64 or tau.shape != nv_shape:
-                tau = checked_tau(tau)
-        return aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
+    if engine is None and not tau_call:
+        def f_engine(q, v, t):                 # (free motion, constant torques: the stage loop's f)
+            return aba(model, data, q, v, tau_c)
+    else:
+        def f_engine(q, v, t):
+            tau = tau_c
+            if tau_call:
+                tau = tau(t, q, v)
+                if type(tau) is not ndarray or tau.dtype is not F64 or tau.shape != nv_shape:
+                    tau = checked_tau(tau)
+            return aba(model, data, q, v, tau) if engine is None else engine(q, v, tau, t)
+    # Pinocchio's a: a float64 vector of nv entries (the compiled step loop need not check it)
+    f_engine.returns_float64_vector = True
 
     def f(q, V, t):
         if has_roots:

@@ -10,6 +10,7 @@ instead of a list per body set.
 import numpy as np
 
 from ..kernels import entry_point
+from ..kernels import genalpha as _ga
 from ..kernels import stage as _k
 from ..kernels.rotations import PARAM_CODES
 from .base import NULL_CONTEXT
@@ -174,7 +175,7 @@ class CompiledProblem(LocalProblem):
     def rates(self, X, W, t):
         """[Ẋ, Ẇ] of the local ODE at (X, W) as one vector: the state kernel, the model's f
         (on views of the work array) and the conversion kernel."""
-        _k.ga_state(self._zv, 0.0, self._zx, W, X, self.local_index, self.work, self.bt, self.vt, self.off, True)
+        _ga.ga_state(self._zv, 0.0, self._zx, W, X, self.local_index, self.work, self.bt, self.vt, self.off, True)
         Vd = self.model.f(self._q, self._V, t)
         self.n_f += 1
         if type(Vd) is not np.ndarray or Vd.dtype is not _F64:
@@ -188,7 +189,7 @@ class CompiledProblem(LocalProblem):
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):
         """(q, V, quats, W) at W = Wa + sv Ẇ, X = dXa + sp Ẇ[to_local]: one kernel call;
         views of the work array, valid until the next evaluation."""
-        _k.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off, False)
+        _ga.ga_state(Wd, sv, sp, Wa, dXa, to_local, self.work, self.bt, self.vt, self.off, False)
         return self._q, self._V, self._p, self._W
 
     def ga_state_args(self, sv, sp, Wa, dXa, to_local):
@@ -200,7 +201,7 @@ class CompiledProblem(LocalProblem):
         """One kernel call instead of ~10 numpy operations."""
         n, nX = len(W), len(to_local)
         a0, Wa, dXa, sp = np.empty(n), np.empty(n), np.empty(nX), np.empty(nX)
-        _k.ga_affine(W, Wd, a, af, am, h, g, b, k, self.chart_scale, to_local, a0, Wa, dXa, sp)
+        _ga.ga_affine(W, Wd, a, af, am, h, g, b, k, self.chart_scale, to_local, a0, Wa, dXa, sp)
         return a0, Wa, dXa, sp
 
     error_sums = staticmethod(_k.error_sums)
@@ -213,7 +214,7 @@ class CompiledProblem(LocalProblem):
         """r = Ẇ - Ẇ(V̇) at the last ga_state (W, quats are its own); returns Σ r²."""
         if type(Vd) is not np.ndarray or Vd.dtype is not _F64:
             Vd = np.ascontiguousarray(Vd, dtype=float)
-        return _k.ga_residual(Vd, Wd, r, self.work, self.bt, self.off)
+        return _ga.ga_residual(Vd, Wd, r, self.work, self.bt, self.off)
 
     # --- the stage API ------------------------------------------------------------
     def stage(self, KX, KW, i, a, h, W0, t, ts, climit=np.inf):

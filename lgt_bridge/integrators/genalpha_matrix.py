@@ -330,7 +330,7 @@ def _csr_product(S):
     """r ↦ S r through the compiled CSR kernel (a dense S: its own product)."""
     if not hasattr(S, "tocsr"):
         return S.dot
-    from ..kernels.stage import csr_matvec
+    from ..kernels.genalpha import csr_matvec
     S = S.tocsr()
     ip, ix = S.indptr.astype(np.int64), S.indices.astype(np.int64)
     data, n = np.ascontiguousarray(S.data, dtype=float), S.shape[0]

@@ -88,7 +88,7 @@ _KERNEL = []
 def _kernel():
     """The fused update kernel, imported on the first use (numba stays unloaded on the numpy
     backend) and kept: an import statement costs ~0.7 µs a step."""
-    from ..kernels.stage import ga_force_newton
+    from ..kernels.genalpha import ga_force_newton
     _KERNEL.append(ga_force_newton)
     return ga_force_newton
 

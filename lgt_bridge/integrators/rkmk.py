@@ -78,8 +78,10 @@ class ExplicitRK(Stepper):
         self.tab = tableau
         ns = tableau.stages + (len(tableau.extra[1]) if tableau.extra is not None else 0)
         # two sets of stage buffers: the last accepted step's stages stay valid for its
-        # dense output while the next step is attempted in the other set
-        self._bufs = [(np.zeros((ns, problem.nX)), np.zeros((ns, problem.nv))) for _ in range(2)]
+        # dense output while the next step is attempted in the other set; views of one
+        # array per kind (the compiled step loop takes both sets in one argument each)
+        self._BX, self._BW = np.zeros((2, ns, problem.nX)), np.zeros((2, ns, problem.nv))
+        self._bufs = [(self._BX[k], self._BW[k]) for k in range(2)]
         self.KX, self.KW = self._bufs[0]
         self._A, self._b, self._c = _stage_coefficients(tableau)
         self._fsal = False                     # KW[0] holds the first stage of the next step

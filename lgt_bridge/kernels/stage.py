@@ -27,10 +27,9 @@ from numba import njit
 
 from . import guard_cache
 from .charts import increment, rot_rates, se3_rates, translation, usage
-from .linalg import lu_solve
 from .rotations import cross, from_quat, qmul, rotate, to_quat
 
-guard_cache(__file__, extra=(__file__.replace("stage.py", "linalg.py"),))
+guard_cache(__file__)
 
 # columns of the body table (ENGINE: 1 when f takes and gives this body's velocities in the
 # engine's body-frame form, see the module's docstring)
@@ -330,8 +329,8 @@ def dense_states(w, FX, FW, W0, bt, vt, qk, pk, Q, V):
 
 # explicit signatures (V̇ and the weights of any layout; the buffers C-contiguous): one
 # compilation each, and an entry point without type dispatch for the steppers' own buffers
-@njit(f"float64({_V}, {_MC}, {_MC}, {_V}, int64, float64, {_VC}, {_IC})", cache=True, error_model="numpy")
-def stage(Vd, KX, KW, a, i, h, w, I):
+@njit(cache=True, error_model="numpy", inline="always")
+def stage_body(Vd, KX, KW, a, i, h, w, I):
     """One fused call per stage: when ``Vd`` is not empty, the stage derivative of stage
     i - 1 from the model's V̇ (KW[i-1]; -1.0 is returned when KX[i-1] or KW[i-1] is not
     finite); then, when ``a`` is not empty, the state of stage i (X, W, q, V, p in the work
@@ -352,55 +351,10 @@ def stage(Vd, KX, KW, a, i, h, w, I):
     return c
 
 
-@njit(cache=True, error_model="numpy")
-def ga_state(Wd, sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
-    """Generalized-α's state for the unknowns Ẇ (affine in them): W = Wa + sv Ẇ,
-    X = dXa + sp Ẇ[tl] (sp per entry of X: the chart scale; tl: X's entries in V's layout),
-    then τ, the model velocity and (``kin``: radau5's rates) Ẋ of every body into the work
-    array, as stage_state."""
-    X, W, q, V, W0, qk, pk, p = views(w, off)
-    for j in range(W.shape[0]):
-        W[j] = Wa[j] + sv * Wd[j]
-    for j in range(X.shape[0]):
-        X[j] = dXa[j] + sp[j] * Wd[tl[j]]
-    tau_state(False, X, W, bt, vt, qk, pk, q, V, w[off[OXD]:off[OXD] + off[NX_]], p, kin)
-
-
-@njit(cache=True, error_model="numpy")
-def ga_affine(W, Wd, a, af, am, h, g, b, k, scale, tl, a0, Wa, dXa, sp):
-    """Generalized-α's step constants (genalpha.GenAlpha._affine): a0 = (α_f Ẇ - α_m a)/(1 - α_m),
-    Wa = W + h(1 - γ) a + hγ a0, dXa = scale · (hW + h²(½ - β) a + h²β a0)[tl], sp = h²βk scale."""
-    for j in range(W.shape[0]):
-        a0[j] = (af * Wd[j] - am * a[j]) / (1.0 - am)
-        Wa[j] = W[j] + h * (1.0 - g) * a[j] + h * g * a0[j]
-    hh = h * h
-    for j in range(dXa.shape[0]):
-        i = tl[j]
-        dXa[j] = scale[j] * (h * W[i] + hh * (0.5 - b) * a[i] + hh * b * a0[i])
-        sp[j] = hh * b * k * scale[j]
-
-
-@njit(cache=True, error_model="numpy")
-def ga_residual(Vd, Wd, r, w, bt, off):
-    """r = Ẇ - Ẇ(V̇) at the state of the work array (generalized-α's unconstrained rows);
-    the sum of r² (inf or NaN when r is not finite)."""
-    X, W, q, V, W0, qk, pk, p = views(w, off)
-    convert(2, Vd, W, p, bt, r)
-    s = 0.0
-    for j in range(r.shape[0]):
-        r[j] = Wd[j] - r[j]
-        s += r[j] * r[j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def csr_matvec(indptr, indices, data, x, out):
-    """out = S x for a CSR matrix (scipy's per-call overhead is ~3 µs)."""
-    for i in range(out.shape[0]):
-        acc = 0.0
-        for k in range(indptr[i], indptr[i + 1]):
-            acc += data[k] * x[indices[k]]
-        out[i] = acc
+@njit(f"float64({_V}, {_MC}, {_MC}, {_V}, int64, float64, {_VC}, {_IC})", cache=True, error_model="numpy")
+def stage(Vd, KX, KW, a, i, h, w, I):
+    """:func:`stage_body`, compiled on its own (the steppers' entry point)."""
+    return stage_body(Vd, KX, KW, a, i, h, w, I)
 
 
 @njit(cache=True, error_model="numpy")
@@ -428,9 +382,8 @@ def error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
     return s5, s3
 
 
-@njit(f"UniTuple(float64, 6)({_V}, {_MC}, {_MC}, {_MC}, int64, float64, {_VC}, {_IC}, float64, float64)",
-      cache=True, error_model="numpy")
-def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
+@njit(cache=True, error_model="numpy", inline="always")
+def step_end_body(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     """The end of an embedded pair's step in one call: the derivative of stage i - 1 from
     the model's V̇ (when ``Vd`` is not empty), the end state with the weights b = T[0] (X1,
     W1, q1, V1, p in the work array), the error sums of the weights e5 = T[1], e3 = T[2]
@@ -457,39 +410,8 @@ def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     return 0.0, s5, s3, num, den, sq
 
 
-@njit(cache=True, error_model="numpy")
-def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
-                    sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
-    """One Newton update of generalized-α's residual in forces with a constant mass matrix
-    (CSR ``mp, mi, mv``) and no SE(3) body: r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (A
-    dense, nc x n), then z -= J⁻¹ r with the sparse LU factors of J (:func:`.linalg.lu_solve`'s
-    arguments), then the state at the new Ẇ into the work array (:func:`ga_state`'s
-    arguments after Ẇ: the next update's model call reads it; one kernel call less an
-    update). Returns |ΔẆ|², or -1 when r is not finite (z and the state untouched). The
-    numpy reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
-    tests hold them equal."""
-    n, nc = Q.shape[0], g.shape[0]
-    s = 0.0
-    for i in range(n):
-        acc = -Q[i]
-        for k in range(mp[i], mp[i + 1]):
-            acc += mv[k] * z[mi[k]]
-        for k in range(nc):
-            acc += A[k, i] * z[n + k]
-        r[i] = acc
-        s += acc * acc
-    for k in range(nc):
-        r[n + k] = cg * g[k]
-        s += r[n + k] * r[n + k]
-    if not math.isfinite(s):
-        return -1.0
-    m = n + nc
-    dz = np.empty(m)
-    lu_solve(lp, li, lv, up, ui, uv, perm, r, dz)
-    d2 = 0.0
-    for i in range(m):
-        z[i] -= dz[i]
-        if i < n:
-            d2 += dz[i] * dz[i]
-    ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
-    return d2
+@njit(f"UniTuple(float64, 6)({_V}, {_MC}, {_MC}, {_MC}, int64, float64, {_VC}, {_IC}, float64, float64)",
+      cache=True, error_model="numpy")
+def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
+    """:func:`step_end_body`, compiled on its own (the steppers' entry point)."""
+    return step_end_body(Vd, KX, KW, T, i, h, w, I, rtol, atol)

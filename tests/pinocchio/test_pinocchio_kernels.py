@@ -262,3 +262,33 @@ def test_a_model_and_its_run_are_freed_at_once():
         assert ref() is None
     finally:
         gc.enable()
+
+
+@pytest.mark.parametrize("torques", [None, "pd"])
+def test_compiled_step_loop_takes_the_python_loops_steps(torques):
+    """A free-flying humanoid (f in Pinocchio's own velocities, ABA per stage): the compiled
+    step loop (whose f result goes unchecked for Pinocchio's own a) takes the Python loop's
+    steps, with constant and with state-feedback torques, over consecutive horizons."""
+    from lgt_bridge import Simulation
+    model = humanoid()
+    q0 = pin.neutral(model)
+    v0 = np.linspace(-2.0, 2.0, model.nv)
+    tau = None
+    if torques == "pd":
+        def tau(t, q, v):
+            out = -2.0 * v
+            out[:6] = 0.0
+            return out
+    runs = []
+    for use in (True, False):
+        pm = PinocchioModel(model, q0=q0, v0=v0, tau=tau)
+        assert pm.engine_velocity is not None
+        sim = Simulation(pm, method="dop853", rtol=1e-11, atol=1e-11)
+        sim._use_loop = use
+        rs = [sim.run(0.1 * k, t_eval=[0.1 * k]) for k in range(1, 5)]
+        runs.append((np.concatenate([r.q for r in rs]), sim.n_steps, sim.stepper.prob.n_f,
+                     getattr(sim.stepper, "_compiled_loop", None)))
+    (qa, na, fa, loop), (qb, nb, fb, none) = runs
+    assert loop is not None and loop.runs >= 4 and none is None
+    assert na == nb and fa == fb and na > 8
+    np.testing.assert_allclose(qa, qb, rtol=1e-12, atol=1e-14)

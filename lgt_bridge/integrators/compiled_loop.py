@@ -1,0 +1,216 @@
+"""The embedded pairs' step loop in one compiled kernel (:func:`lgt_bridge.kernels.steps.drive`).
+
+On the compiled backend a dop853 step of a small robot is 12 evaluations of f, 12 stage
+kernel calls and, driven from Python (``Simulation._step``, ``AdaptiveRK._attempt`` and
+``CompiledProblem.run_stages``), about 30 µs of Python: half a step's f on solo12. Here a
+run is a bare loop of one kernel call and one f per stage; the kernel does the rest of the
+step loop between two f, with the Python stepper's arithmetic (same steps, same results:
+tests/core/test_compiled_loop.py). It hands back to Python
+
+- after an accepted step that reaches the stop time, or after every accepted step when
+  something must run then (an ``on_step`` hook, the model's ``write_back``), and every
+  ``Simulation.BUDGET_WINDOW`` steps (the step-budget check);
+- an attempt the Python stepper does itself (the step budget spent, a stage beyond its
+  chart's domain or not finite): :meth:`Simulation._step` then takes that step, with its
+  failure reports and retries, and the loop goes on (that attempt's f are evaluated twice);
+- a step size below what the run allows (the same StepFailed as the Python loop).
+
+Used for a :class:`~.rkmk.AdaptiveRK` stepper on a
+:class:`~.compiled.CompiledProblem`, without projection, post-step hooks or mode switches
+(those stay in the Python loop).
+"""
+import numpy as np
+
+from ..errors import ModelError
+from ..kernels import entry_point
+from ..kernels import steps as _s
+from .base import StepFailed
+from .compiled import CompiledProblem
+from .rkmk import AdaptiveRK
+
+_DRIVE = entry_point(_s.drive)
+_NONE = np.zeros(0)
+_F64 = np.dtype(np.float64)
+_NDARRAY = np.ndarray
+
+
+def of(sim):
+    """The loop of a :class:`~lgt_bridge.Simulation` (made once per stepper), or None when
+    its stepper or model needs the Python loop."""
+    st = sim.stepper
+    loop = getattr(st, "_compiled_loop", None)
+    if loop is None:
+        if not (type(st) is AdaptiveRK and isinstance(st.prob, CompiledProblem)):
+            return None
+        loop = st._compiled_loop = Loop(st)
+    if st.projector is not None or sim._post is not None or sim._switches is not None:
+        return None
+    return loop
+
+
+_CONSTANTS = {}
+
+
+def _constants(st):
+    """(C's entries fixed by the stepper's tableau and class, TA: A, c and the pair's rows),
+    made once per tableau."""
+    tab = st.tab
+    got = _CONSTANTS.get(id(tab))
+    if got is None or got[0] is not tab:
+        ns = tab.stages
+        A = np.zeros((ns, ns))
+        for i, row in enumerate(st._A):
+            A[i, :len(row)] = row
+        TA = np.ascontiguousarray(np.vstack([A, np.asarray(st._c, float)[None], st._T]))
+        C, ctl = np.zeros(_s.NC), st.control
+        C[_s.ALPHA], C[_s.BETA], C[_s.FACMIN], C[_s.FACMAX] = ctl.alpha, ctl.beta, ctl.facmin, ctl.facmax
+        C[_s.ORDER], C[_s.SAFETY] = ctl.order, ctl.SAFETY
+        C[_s.LANDING], C[_s.GROWS] = st.landing_steps, 1.0 if st.landing_grows else 0.0
+        C[_s.BOUND], C[_s.RHODECAY], C[_s.STIFFSTEPS] = st.stability_bound, st.RHO_DECAY, st.STIFF_STEPS
+        C[_s.HASPAIR] = st._stiff_pair is not None
+        C[_s.HASE3] = tab.e3 is not None
+        C[_s.TABFSAL] = bool(tab.fsal)
+        C[_s.NSTAGES] = ns
+        if len(_CONSTANTS) > 16:
+            _CONSTANTS.clear()
+        got = _CONSTANTS[id(tab)] = (tab, C, TA)
+    return got[1:]
+
+
+class Loop:
+    """The kernel's loop array for one stepper (:func:`.kernels.steps.layout`): the state C
+    (its constants set here), the save area of the last accepted step's end, the tableau, and
+    the stepper's stage buffers, which become views of it."""
+
+    def __init__(self, st):
+        prob = st.prob
+        C0, TA = _constants(st)
+        nbuf = st._BX.shape[1]
+        self.n_end = prob._n_end
+        lay, size = _s.layout(st.tab.stages, len(TA), nbuf, prob.nX, prob.nv, prob._n_end + 4 * len(prob.bt))
+        self.L = L = np.zeros(size)
+        self.C = C = L[:_s.NC]
+        C[:] = C0
+        C[_s.OS:_s.NBUF + 1] = lay
+        C[_s.RTOL], C[_s.ATOL], C[_s.CLIMIT], C[_s.NY] = st.rtol, st.atol, st.climit, st._n
+        o_s, o_ta, o_bx, o_bw = lay[:4]
+        self.S = L[o_s:o_ta]
+        L[o_ta:o_bx] = TA.ravel()
+        # the stepper's buffers as views of L (their contents and which set is current kept)
+        BX, BW = L[o_bx:o_bw].reshape(st._BX.shape), L[o_bw:].reshape(st._BW.shape)
+        BX[:], BW[:] = st._BX, st._BW
+        cur = 0 if st.KX is st._bufs[0][0] else 1
+        last = next((k for k in range(2) if st._last_KW is st._bufs[k][1]), None)
+        st._BX, st._BW = BX, BW
+        st._bufs = [(BX[k], BW[k]) for k in range(2)]
+        st.KX, st.KW = st._bufs[cur]
+        if last is not None:
+            st._last_KW = st._bufs[last][1]
+        self.runs = 0                          # calls of run (tests: the loop was used)
+
+    def _load(self, sim, stop, each):
+        """The simulation's and stepper's state into C."""
+        st, C = sim.stepper, self.C
+        ctl = st.control
+        C[_s.T], C[_s.H], C[_s.TARGET], C[_s.STOP] = sim.t, sim.h, sim.t_end, stop
+        C[_s.STAGE], C[_s.NSTEPS], C[_s.MAXSTEPS], C[_s.NREJ], C[_s.NF] = -1.0, sim.n_steps, sim.max_steps, 0.0, 0.0
+        C[_s.CUR] = 0.0 if st.KX is st._bufs[0][0] else 1.0
+        C[_s.FSAL], C[_s.HCAY], C[_s.HSTABLE], C[_s.RHO] = st._fsal, st._hcay, st.h_stable, st._rho
+        C[_s.NSTIFF], C[_s.NNONSTIFF] = st._n_stiff, st._n_nonstiff
+        C[_s.STIFF_T], C[_s.STIFF_H], C[_s.STIFF_RHO] = st.stiff if st.stiff is not None else (np.nan,) * 3
+        C[_s.ERRPREV], C[_s.CAP] = ctl._err_prev, ctl._cap
+        C[_s.MAXSTEP], C[_s.MINSTEP] = sim.max_step, sim.min_step
+        C[_s.EACH], C[_s.BUDGET] = each, sim.BUDGET_WINDOW
+        C[_s.ROLL] = C[_s.ACC] = 0.0
+        prob = st.prob
+        prob._W0[:] = st.W                 # the step's start: W0 here, q_k and p_k the problem's base
+        prob._W0_src = None
+        prob._vd = _NONE
+
+    def _unload(self, sim):
+        """C into the simulation and stepper (the last accepted step's end as their state,
+        its dense output when the work array still holds its start)."""
+        st, C = sim.stepper, self.C
+        prob, ctl = st.prob, st.control
+        sim.t, sim.h, sim.n_steps = C[_s.T], C[_s.H], int(C[_s.NSTEPS])
+        st.n_rejected += int(C[_s.NREJ])
+        prob.n_f += int(C[_s.NF])
+        C[_s.NREJ] = C[_s.NF] = 0.0
+        st._fsal = bool(C[_s.FSAL])
+        cur = int(C[_s.CUR])
+        st.KX, st.KW = st._bufs[cur]
+        st._hcay, st.h_stable, st._rho = C[_s.HCAY], C[_s.HSTABLE], C[_s.RHO]
+        st._n_stiff, st._n_nonstiff = int(C[_s.NSTIFF]), int(C[_s.NNONSTIFF])
+        st.stiff = None if np.isnan(C[_s.STIFF_T]) else (C[_s.STIFF_T], C[_s.STIFF_H], C[_s.STIFF_RHO])
+        ctl._err_prev, ctl._cap = C[_s.ERRPREV], C[_s.CAP]
+        prob._vd = _NONE
+        prob._W0_src = None
+        if not C[_s.ACC]:
+            return
+        C[_s.ACC] = 0.0
+        nX, nv, n_end = prob.nX, prob.nv, self.n_end
+        y = self.S.copy()
+        X1, W1, q1, V1 = y[:nX], y[nX:nX + nv], y[nX + nv:n_end - nv], y[n_end - nv:n_end]
+        quats = y[n_end:].reshape(-1, 4)
+        st._last_KW = st._bufs[1 - cur][1]
+        st._dense = None
+        if C[_s.ROLL]:              # the accepted step's start is still the problem's base
+            base = (prob._qk.copy(), prob._pk.copy())
+            st._dense_args = (C[_s.TPREV], C[_s.HPREV], X1, W1, *st._bufs[1 - cur], prob._W0.copy(), base)
+        else:
+            st._dense_args = None
+        st.q, st.V, st.W = q1, V1, W1
+        prob.start(q1, quats)
+
+    def run(self, sim, stop, on_step):
+        """Steps until t reaches ``stop`` (:meth:`Simulation._steps_until`)."""
+        st = sim.stepper
+        prob = st.prob
+        tol = 1e-12 * max(1.0, abs(stop))
+        if not sim.t < stop - tol:
+            return
+        self.runs += 1
+        each = on_step is not None or sim.model.step_write_back
+        kern, f, q, v = _DRIVE, prob._fs, prob._q, prob._vs
+        w, I, L, C = prob.work, prob._I, self.L, self.C
+        ndarray, F64 = _NDARRAY, _F64
+        # an f whose result needs no check (its adapter says it returns a float64 vector)
+        trusted = getattr(f, "returns_float64_vector", False) is True
+        while True:
+            self._load(sim, stop, each)
+            vd = _NONE
+            try:
+                # one kernel call and one f per stage, nothing else (NaN: back to Python, C[CODE]
+                # says why)
+                if trusted:
+                    ts = kern(vd, w, I, L)
+                    while ts == ts:
+                        ts = kern(f(q, v, ts), w, I, L)
+                else:
+                    ts = kern(vd, w, I, L)
+                    while ts == ts:
+                        vd = f(q, v, ts)
+                        if vd.__class__ is not ndarray or vd.dtype is not F64 or vd.ndim != 1:
+                            vd = np.ascontiguousarray(vd, dtype=float).reshape(-1)
+                        ts = kern(vd, w, I, L)
+            except ModelError as exc:          # the engine raised: end the run, keep the steps
+                raise StepFailed(str(exc), error=ModelError) from exc
+            finally:
+                self._unload(sim)
+            code = C[_s.CODE]
+            if code == _s.ACCEPTED:            # Simulation._step's part after an accepted step
+                sim.model.write_back(st.q, st.V, sim.t)
+                if on_step is not None:
+                    on_step(sim.t, st.q, st.V)
+                if sim.n_steps % sim.BUDGET_WINDOW == 0:
+                    sim._check_affordable()
+                target = sim.t_end
+                if (sim.h < sim.min_step and sim.h < C[_s.HBEFORE]
+                        and sim.t < target - 1e-12 * max(1.0, abs(target))):
+                    raise sim._too_small()
+            elif code == _s.PY_STEP:
+                sim._step(sim.t_end, on_step)
+            else:
+                raise sim._too_small(underflow=code == _s.UNDERFLOW)
+            if not sim.t < stop - tol:
+                return
