@@ -402,7 +402,8 @@ class Simulation:
         k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
         Q, V = st.dense.many(targets[:k]) if k else (None, None)
         if k < n:                       # the step's own state for targets on its end
-            Qe, Ve = np.tile(st.q, (n - k, 1)), np.tile(st.V, (n - k, 1))
+            Qe, Ve = np.empty((n - k, len(st.q))), np.empty((n - k, len(st.V)))
+            Qe[:], Ve[:] = st.q, st.V
             Q, V = (Qe, Ve) if not k else (np.concatenate([Q, Qe]), np.concatenate([V, Ve]))
         return n, Q, V
 

@@ -183,8 +183,10 @@ class Constraints:
         except TypeError:
             raise InputError(f"constraints: expected a list of Pinocchio constraint models, got a "
                              f"{type(constraints).__name__}.") from None
+        made = []                                  # (summed over a list: a StdVec's iterator is slow)
         for k, c in enumerate(constraints):
             cm = _rigid(pin, model, k, c)
+            made.append(cm)
             self.cms.append(cm)
             self.cds.append(cm.createData())
             self.names.append(f"constraints[{k}] ({type(c).__name__} on joint {cm.joint1_id} "
@@ -196,7 +198,7 @@ class Constraints:
                              f"pin.ProximalSettings(1e-12, 1e-12, 50): accuracy, mu, max_iter), got a "
                              f"{type(prox_settings).__name__}.")
         self.prox = pin.ProximalSettings(1e-12, 1e-12, 50) if prox_settings is None else prox_settings
-        self.n_all = self.n = int(sum(rows_of(cm) for cm in self.cms))
+        self.n_all = self.n = int(sum(rows_of(cm) for cm in made))
         self.rows = np.arange(self.n)
         self.redundant_rows = []
         self.anchored = []
