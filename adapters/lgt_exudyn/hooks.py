@@ -21,6 +21,12 @@ class StepHooks:
     """The drop-in's per-step methods of :class:`~lgt_exudyn.model.ExudynModel` (they use its
     parts: ``engine``, ``nodes``, ``cons``, ``sd``, ``mbs``)."""
 
+    #: the state is written into Exudyn where a run stops or outputs (the drop-in's outputs,
+    #: a run's end), not after every step: f writes each stage's state itself and Exudyn's
+    #: sensors and solution file are written from the outputs (which lets the compiled step
+    #: loop run on between them)
+    step_write_back = False
+
     def _take_discontinuous(self, settings):
         """The discontinuous parts of the system: data coordinates (contact and friction
         states: ``post_step``, Exudyn's discontinuous iteration after each step), or else a
