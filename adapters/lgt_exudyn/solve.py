@@ -219,6 +219,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     rebuilt = [0]
     pending = []            # an exception inside the step, re-raised after Exudyn's loop
     rows = _OutputRows(sim, t1, lambda: solver.it.currentStepSize)
+    # the state a step ended on is in Exudyn already (the driver's write-back) unless
+    # something evaluated the model since: an event function, or the pre-step residual
+    rewrite_free = not prestep and tracker is None
     t_last = t1 - 1e-12 * max(1.0, abs(t1))
 
     # the data coordinates (contact and friction states) as the bridge's steps left them, and
@@ -232,6 +235,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         if data is not None and t_out != data[1]:
             sd.SetDataCoordinates(data[0])
         try:
+            if plain:                # an output the last bridge step covers: its state only
+                i = rows.i
+                if i < len(rows.t) and rows.t[i] == t_out and t_out < t_last:
+                    rows.i = i + 1
+                    plain[0](rows.Q[i], rows.V[i], t_out)
+                    return True
             if prestep:              # the model may have changed: no stage carried over
                 if model.rows_changed(sim.q, sim.V, sim.t):     # connectors switched on/off
                     rep = sim.rebuild()
@@ -260,7 +269,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             last = t_out >= t_last
             if data is not None:
                 data[0], data[1] = np.array(sd.GetDataCoordinates()), t_out
-            model.write_outputs(q_out, V_out, t_out, accelerations or last, multipliers or last)
+            if accelerations or multipliers or last or not (rows.written and rewrite_free):
+                model.write_outputs(q_out, V_out, t_out, accelerations or last, multipliers or last)
         except _events.Terminal as stop:       # the state is at the event: Exudyn's run ends there
             stopped.append(stop.message)
             model.write_outputs(sim.q, sim.V, sim.t, True, True)
@@ -286,6 +296,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     reads = _outputs_read(mbs, simulationSettings)
     accelerations = reads["accelerations"] if accelerations is None else accelerations
     multipliers = reads["multipliers"]
+    # outputs read the state alone, kept as the bridge's steps leave it: newton's first
+    # lines write it (the state writer looked up once), nothing else in between
+    plain = [model.writer()] if (sim.dense and rewrite_free and data is None
+                                 and not (accelerations or multipliers)) else []
     solver = exu.MainSolverImplicitSecondOrder()
     solver.SetUserFunctionNewton(mbs, newton)
     saved = [(ti, "automaticStepSize", auto_step)]
@@ -375,16 +389,25 @@ class _OutputRows:
     def __init__(self, sim, t_end, step_size):
         self.sim, self.t_end, self.step_size = sim, t_end, step_size      # step_size(): Exudyn's h
         self.t, self.Q, self.V, self.i = (), None, None, 0
+        self.written = False
 
     def at(self, target, on_step):
-        """(q, V) at Exudyn's step end ``target``."""
+        """(q, V) at Exudyn's step end ``target``; ``written`` says whether it is the state a
+        bridge step just ended on at ``target`` (the driver wrote it into the system)."""
+        sim = self.sim
+        if not sim.dense:               # fixed steps: each Exudyn step ends on a bridge step
+            n = sim.n_steps
+            q, V = sim.advance_to(target, on_step)
+            self.written = sim.n_steps > n and sim.t == target
+            return q, V
+        self.written = False
         i = self.i
         if i < len(self.t) and self.t[i] == target:
             self.i = i + 1
             return self.Q[i], self.V[i]
-        sim, h = self.sim, self.step_size()
+        h = self.step_size()
         # the Exudyn steps the next bridge step may cover (sim.h: its proposed length)
-        m = max(1, min(int((self.t_end - target) / h) + 1, int(sim.h / h) + 2)) if sim.dense else 1
+        m = max(1, min(int((self.t_end - target) / h) + 1, int(sim.h / h) + 2))
         if m == 1:
             times = np.array([target])
         else:

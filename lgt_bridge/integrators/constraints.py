@@ -20,6 +20,10 @@ from ..errors import ModelNote
 from .problem import make_problem
 
 
+#: the rounding floor's factor: 4 eps (np.finfo costs ~2 µs a call, once per step here)
+_EPS4 = 4 * float(np.finfo(float).eps)
+
+
 class Projector:
     """``tol``: the position residual at which the Gauss-Newton iteration stops; None (the
     default) iterates to the rounding floor: until max|g| ≤ 4 eps (1 + max|q|) or the
@@ -52,7 +56,7 @@ class Projector:
         """q moved onto g(q, t) = 0 (position rows); returns (q, residual before, after)."""
         g = self._g(q, t)
         before = gmax = float(np.abs(g).max()) if len(g) else 0.0
-        tol = self.tol if self.tol is not None else 4 * np.finfo(float).eps * (1.0 + float(np.abs(q).max()))
+        tol = self.tol if self.tol is not None else _EPS4 * (1.0 + float(np.abs(q).max()))
         for k in range(self.max_iter):
             if not len(g) or gmax <= tol:
                 break
@@ -78,7 +82,9 @@ class Projector:
         if b is not None:
             r = r - b
         V = V - correct(r)
-        r = A @ V - (0.0 if b is None else b)
+        r = A @ V
+        if b is not None:
+            r = r - b
         return V, float(np.abs(r).max())
 
     def __call__(self, q, V, t=None):

@@ -365,6 +365,39 @@ def test_drop_in_outputs_of_a_step_in_one_call_equal_one_at_a_time_and_exudyns_o
     assert diffs[1] < 1e-5 and 10 < diffs[0] / diffs[1] < 25, diffs
 
 
+@pytest.mark.parametrize("method", ["rkmk4", "genalpha"])
+def test_fixed_step_outputs_are_the_states_the_steps_end_on(monkeypatch, method):
+    """Fixed steps end on Exudyn's steps, and the driver has written each step's end state
+    into the system: the drop-in does not write it again. The sensor rows are the states
+    simulate computes at the same steps, and equal bitwise those of a run writing every
+    output state again."""
+    from exudyn.utilities import SensorNode
+    from lgt_exudyn import solve
+    T, n = 0.05, 50
+
+    def run():
+        SC, mbs, node = em.heavy_top(em.EP, assemble=False)
+        sens = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+                                        outputVariableType=exu.OutputVariableType.Position))
+        mbs.Assemble()
+        s = em.settings(T, n, sensors=True)
+        s.solution.sensors.writePeriod = T / n
+        SolveDynamic(mbs, s, method=method)
+        return mbs.GetSensorStoredData(sens)
+    once = run()
+    at = solve._OutputRows.at
+
+    def rewritten(self, target, on_step):
+        out = at(self, target, on_step)
+        self.written = False
+        return out
+    monkeypatch.setattr(solve._OutputRows, "at", rewritten)
+    assert np.array_equal(once, run()) and len(once) == n + 1
+    SC, mbs, node = em.heavy_top(em.EP)
+    r = simulate(ExudynModel(mbs), (0, T), method=method, dt=T / n, t_eval=once[:, 0])
+    assert np.abs(r.q[:, :3] - once[:, 1:]).max() < 1e-12
+
+
 def test_singular_mass_is_refused_before_the_first_step():
     """A body with no inertia about one axis: InputError naming it, from the constant-M̄
     path (Cholesky fails, then the eigen check names the direction)."""
