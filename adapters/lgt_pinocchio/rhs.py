@@ -10,6 +10,8 @@
 """
 from collections import namedtuple
 
+from functools import partial
+
 import numpy as np
 
 from lgt_bridge.errors import InputError
@@ -85,6 +87,8 @@ def build_f(m, kernels):
     if engine is None and not tau_call:
         def f_engine(q, v, t):                 # (free motion, constant torques: the stage loop's f)
             return aba(model, data, q, v, tau_c)
+        # the same without a Python frame: aba(model, data)(q, v, tau_c), for the compiled step loop
+        f_engine.time_free_call = (partial(aba, model, data), tau_c)
     else:
         def f_engine(q, v, t):
             tau = tau_c

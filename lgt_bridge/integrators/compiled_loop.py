@@ -15,6 +15,11 @@ tests/core/test_compiled_loop.py). It hands back to Python
   failure reports and retries, and the loop goes on (that attempt's f are evaluated twice);
 - a step size below what the run allows (the same StepFailed as the Python loop).
 
+An f whose adapter vouches for its result (attribute ``returns_float64_vector``: Pinocchio's
+ABA) is called without the check of what it returns, and one that says how to call the
+engine directly (``time_free_call = (g, arg)``: f(q, v, t) = g(q, v, arg) for every t) without
+its own Python frame.
+
 Used for a :class:`~.rkmk.AdaptiveRK` stepper on a
 :class:`~.compiled.CompiledProblem`, without projection, post-step hooks or mode switches
 (those stay in the Python loop).
@@ -176,13 +181,19 @@ class Loop:
         ndarray, F64 = _NDARRAY, _F64
         # an f whose result needs no check (its adapter says it returns a float64 vector)
         trusted = getattr(f, "returns_float64_vector", False) is True
+        fast = getattr(f, "time_free_call", None) if trusted else None
+        g, arg = fast if fast is not None else (None, None)
         while True:
             self._load(sim, stop, each)
             vd = _NONE
             try:
                 # one kernel call and one f per stage, nothing else (NaN: back to Python, C[CODE]
                 # says why)
-                if trusted:
+                if fast is not None:   # f(q, v, t) = g(q, v, arg) for every t, with no Python frame
+                    ts = kern(vd, w, I, L)
+                    while ts == ts:
+                        ts = kern(g(q, v, arg), w, I, L)
+                elif trusted:
                     ts = kern(vd, w, I, L)
                     while ts == ts:
                         ts = kern(f(q, v, ts), w, I, L)

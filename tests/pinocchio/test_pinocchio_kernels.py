@@ -267,8 +267,9 @@ def test_a_model_and_its_run_are_freed_at_once():
 @pytest.mark.parametrize("torques", [None, "pd"])
 def test_compiled_step_loop_takes_the_python_loops_steps(torques):
     """A free-flying humanoid (f in Pinocchio's own velocities, ABA per stage): the compiled
-    step loop (whose f result goes unchecked for Pinocchio's own a) takes the Python loop's
-    steps, with constant and with state-feedback torques, over consecutive horizons."""
+    step loop (whose f result goes unchecked for Pinocchio's own a, and which calls aba itself
+    for constant torques) takes the Python loop's steps, with constant and with state-feedback
+    torques, over consecutive horizons."""
     from lgt_bridge import Simulation
     model = humanoid()
     q0 = pin.neutral(model)
@@ -283,6 +284,8 @@ def test_compiled_step_loop_takes_the_python_loops_steps(torques):
     for use in (True, False):
         pm = PinocchioModel(model, q0=q0, v0=v0, tau=tau)
         assert pm.engine_velocity is not None
+        # constant torques: the loop calls aba without f's frame; state feedback: through f
+        assert (getattr(pm.engine_velocity.f, "time_free_call", None) is None) == (tau is not None)
         sim = Simulation(pm, method="dop853", rtol=1e-11, atol=1e-11)
         sim._use_loop = use
         rs = [sim.run(0.1 * k, t_eval=[0.1 * k]) for k in range(1, 5)]
