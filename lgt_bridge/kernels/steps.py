@@ -28,6 +28,7 @@ from numba import njit
 
 from . import guard_cache
 from .stage import OP, OQK, OPK, OW0, NB_, NQ_, NV_, NX_, stage_body as stage, step_end_body as step_end
+from .stage import stage as stage_kernel
 
 guard_cache(__file__, extra=(__file__.replace("steps.py", "stage.py"),))
 
@@ -88,7 +89,7 @@ def _roll(w, off, nend, S):
 
 
 @njit("float64(float64[:], float64[::1], int64[::1], float64[::1])", cache=True, error_model="numpy")
-def drive(Vd, w, I, L):
+def _advance(Vd, w, I, L):
     """Advance the step loop to the next f (see the module's docstring). ``Vd``: the model's
     V̇ at the pending stage (empty: none pending); w, I: the problem's work array and tables;
     L: the loop array (:func:`layout`, one argument instead of five: a numba call costs
@@ -237,3 +238,31 @@ def drive(Vd, w, I, L):
         return _exit(C, PY_STEP)
     C[STAGE] = float(i0)
     return t + TA[ns, i0] * h_try
+
+
+@njit("float64(float64[:], float64[::1], int64[::1], float64[::1])", cache=True, error_model="numpy")
+def drive(Vd, w, I, L):
+    """Advance the step loop to the next f (see the module's docstring and :func:`_advance`,
+    which does all of it but the common case here: the model's V̇ of a stage that is not a
+    step's last, whose derivative and the next stage's state are one call of the compiled
+    stage kernel — in a small function, since this is every call but one a step)."""
+    C = L[:NC]
+    i = int(C[STAGE])
+    ns = int(C[NSTAGES])
+    if Vd.shape[0] > 0 and i < ns - 1:
+        nX, nv = I[NX_], I[NV_]
+        cur, nbuf = int(C[CUR]), int(C[NBUF])
+        o_bx = int(C[OBX]) + cur * nbuf * nX
+        o_bw = int(C[OBW]) + cur * nbuf * nv
+        KX = L[o_bx:o_bx + nbuf * nX].reshape((nbuf, nX))
+        KW = L[o_bw:o_bw + nbuf * nv].reshape((nbuf, nv))
+        o_ta = int(C[OTA])
+        h_try = C[HT]
+        C[NF] += 1.0
+        cm = stage_kernel(Vd, KX, KW, L[o_ta + (i + 1) * ns:o_ta + (i + 2) * ns], i + 1, h_try, w, I)
+        if cm < 0.0 or cm > C[CLIMIT]:
+            C[STAGE] = -1.0
+            return _exit(C, PY_STEP)
+        C[STAGE] = i + 1.0
+        return C[T] + L[o_ta + ns * ns + i + 1] * h_try
+    return _advance(Vd, w, I, L)
