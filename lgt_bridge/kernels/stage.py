@@ -329,8 +329,8 @@ def dense_states(w, FX, FW, W0, bt, vt, qk, pk, Q, V):
 
 # explicit signatures (V̇ and the weights of any layout; the buffers C-contiguous): one
 # compilation each, and an entry point without type dispatch for the steppers' own buffers
-@njit(cache=True, error_model="numpy", inline="always")
-def stage_body(Vd, KX, KW, a, i, h, w, I):
+@njit(f"float64({_V}, {_MC}, {_MC}, {_V}, int64, float64, {_VC}, {_IC})", cache=True, error_model="numpy")
+def stage(Vd, KX, KW, a, i, h, w, I):
     """One fused call per stage: when ``Vd`` is not empty, the stage derivative of stage
     i - 1 from the model's V̇ (KW[i-1]; -1.0 is returned when KX[i-1] or KW[i-1] is not
     finite); then, when ``a`` is not empty, the state of stage i (X, W, q, V, p in the work
@@ -349,12 +349,6 @@ def stage_body(Vd, KX, KW, a, i, h, w, I):
     if off[NE_] > 0:
         engine_velocity(V, p, bt, ve)
     return c
-
-
-@njit(f"float64({_V}, {_MC}, {_MC}, {_V}, int64, float64, {_VC}, {_IC})", cache=True, error_model="numpy")
-def stage(Vd, KX, KW, a, i, h, w, I):
-    """:func:`stage_body`, compiled on its own (the steppers' entry point)."""
-    return stage_body(Vd, KX, KW, a, i, h, w, I)
 
 
 @njit(cache=True, error_model="numpy")
@@ -382,8 +376,9 @@ def error_sums(KX, KW, e5, e3, X1, W1, W0, rtol, atol):
     return s5, s3
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def step_end_body(Vd, KX, KW, T, i, h, w, I, rtol, atol):
+@njit(f"UniTuple(float64, 6)({_V}, {_MC}, {_MC}, {_MC}, int64, float64, {_VC}, {_IC}, float64, float64)",
+      cache=True, error_model="numpy")
+def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     """The end of an embedded pair's step in one call: the derivative of stage i - 1 from
     the model's V̇ (when ``Vd`` is not empty), the end state with the weights b = T[0] (X1,
     W1, q1, V1, p in the work array), the error sums of the weights e5 = T[1], e3 = T[2]
@@ -408,10 +403,3 @@ def step_end_body(Vd, KX, KW, T, i, h, w, I, rtol, atol):
     for j in range(V.shape[0]):
         sq += V[j] * V[j]
     return 0.0, s5, s3, num, den, sq
-
-
-@njit(f"UniTuple(float64, 6)({_V}, {_MC}, {_MC}, {_MC}, int64, float64, {_VC}, {_IC}, float64, float64)",
-      cache=True, error_model="numpy")
-def step_end(Vd, KX, KW, T, i, h, w, I, rtol, atol):
-    """:func:`step_end_body`, compiled on its own (the steppers' entry point)."""
-    return step_end_body(Vd, KX, KW, T, i, h, w, I, rtol, atol)

@@ -27,8 +27,7 @@ import numpy as np
 from numba import njit
 
 from . import guard_cache
-from .stage import OP, OQK, OPK, OW0, NB_, NQ_, NV_, NX_, stage_body as stage, step_end_body as step_end
-from .stage import stage as stage_kernel
+from .stage import OP, OQK, OPK, OW0, NB_, NQ_, NV_, NX_, stage, step_end
 
 guard_cache(__file__, extra=(__file__.replace("steps.py", "stage.py"),))
 
@@ -259,7 +258,7 @@ def drive(Vd, w, I, L):
         o_ta = int(C[OTA])
         h_try = C[HT]
         C[NF] += 1.0
-        cm = stage_kernel(Vd, KX, KW, L[o_ta + (i + 1) * ns:o_ta + (i + 2) * ns], i + 1, h_try, w, I)
+        cm = stage(Vd, KX, KW, L[o_ta + (i + 1) * ns:o_ta + (i + 2) * ns], i + 1, h_try, w, I)
         if cm < 0.0 or cm > C[CLIMIT]:
             C[STAGE] = -1.0
             return _exit(C, PY_STEP)
