@@ -104,8 +104,18 @@ def _nothing():
     pass
 
 
+#: the bar of every run that shows none (its step and close do nothing)
+_OFF = None
+
+
 def simulation_bar(progress, t0, t1, driver, stepper, desc="simulate"):
     """The bar of one integration: simulated time, steps, f evaluations, step size, rate."""
+    global _OFF
+    if mode(progress) is None:                 # no bar: one shared object that does nothing
+        if _OFF is None:
+            _OFF = Progress(False, 1.0, None)
+        return _OFF
+
     def state():
         n = driver.n_steps
         el = time.perf_counter() - bar.start

@@ -56,10 +56,15 @@ def analysis(model, group, chart, analyze):
     it there). ``analyze`` must read nothing of the model but its layout."""
     key = (analyze.__qualname__, _key(group), _key(chart))
     lay = model.layout
-    memo = getattr(model, "__dict__", None)
+    # kept on the layout object (models wrapped afresh share their engine model's layout), or
+    # on the model with its layout when the layout takes no attributes
+    memo = getattr(lay, "__dict__", None)
+    on_layout = memo is not None
+    if not on_layout:
+        memo = getattr(model, "__dict__", None)
     if memo is not None:
-        got = memo.get("_lgt_analysis", {}).get(key)
-        if got is not None and got[0] is lay:
+        got = memo.get("_lgt_analysis", _EMPTY).get(key)
+        if got is not None and (on_layout or got[0] is lay):
             return got[1]
     shared = key + (_layout_key(lay),)
     a = _SHARED.get(shared)
@@ -73,6 +78,7 @@ def analysis(model, group, chart, analyze):
     return a
 
 
+_EMPTY = {}
 #: analyses by layout content, shared by models of equal layouts (oldest dropped first)
 _SHARED = {}
 _SHARED_MAX = 32
