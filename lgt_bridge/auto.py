@@ -71,6 +71,9 @@ def option(kind, value):
 def wants_auto(group, chart):
     """True when an entry of ``group`` or ``chart`` (one value or one per body) is "auto";
     InputError on an entry that is no group (chart) and not "auto"."""
+    if type(group) is str and type(chart) is str and group in GROUPS and chart in CHARTS:
+        return False                     # (the common call, without building lists)
+
     def has(kind, o):
         values = [o] if isinstance(o, str) else list(o)
         return any([option(kind, v) == "auto" for v in values])

@@ -11,9 +11,10 @@ The per-step cost is one increment and one comparison: the clock is read only ev
 ``stride`` steps, with the stride adapted so that checks happen about every
 ``CHECK_S`` seconds.
 """
-import os
 import sys
 import time
+
+from .backend import _env
 
 DELAY = 1.0          # s of wall time before a bar appears in the default mode
 CHECK_S = 0.1        # s between two looks at the clock
@@ -28,7 +29,7 @@ def mode(progress, stream=None):
             tty = stream.isatty()
         except (AttributeError, ValueError):
             return None
-        return "auto" if tty and not os.environ.get("CI") else None
+        return "auto" if tty and not _env("CI") else None
     return "on" if progress else None
 
 
@@ -104,8 +105,18 @@ def _nothing():
     pass
 
 
+#: the bar of every run that shows none (its step and close do nothing)
+_OFF = None
+
+
 def simulation_bar(progress, t0, t1, driver, stepper, desc="simulate"):
     """The bar of one integration: simulated time, steps, f evaluations, step size, rate."""
+    global _OFF
+    if mode(progress) is None:                 # no bar: one shared object that does nothing
+        if _OFF is None:
+            _OFF = Progress(False, 1.0, None)
+        return _OFF
+
     def state():
         n = driver.n_steps
         el = time.perf_counter() - bar.start

@@ -17,6 +17,7 @@ saying why). :func:`~lgt_bridge.simulate` is one ``Simulation(...).run(...)``.
 """
 import math
 import time
+from bisect import bisect_left, bisect_right
 from functools import partial
 
 import numpy as np
@@ -27,6 +28,7 @@ from . import events as _events
 from . import switches as _switches
 from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
+from .integrators import registry as _registry
 from .integrators.constraints import Projector, note_initial_projection, project_initial
 from .integrators.problem import make_problem
 from .lgt import DEFAULT_GROUP
@@ -39,8 +41,7 @@ def make_stepper(model, method, group=DEFAULT_GROUP, chart="exp", *, dt=None, rt
                  project=True, rho_inf=0.9, newton_tol=1e-10, span=None, fixed_steps=False):
     """The stepper behind a method name (the registry's builder), with its local problem
     and projector. Returns (stepper, dt): dt is the (macro) step to use (None: adaptive)."""
-    from .integrators import registry
-    spec = registry.get(method)
+    spec = _registry.get(method)
     prob = make_problem(model, group, chart)
     projector = Projector(model) if (spec.projects and project and model.n_constraints) else None
     stepper = spec.build(prob, dt=dt, rtol=rtol, atol=atol, projector=projector, rho_inf=rho_inf,
@@ -398,12 +399,17 @@ class Simulation:
         st, first = self.stepper, targets[0]
         self._steps_until(first, on_step)
         t, tol = self.t, 1e-12 * max(1.0, abs(self.t))
-        n = 1 if st.dense is None else max(1, int(targets.searchsorted(t + tol, "right")))
-        k = 0 if st.dense is None else min(n, int(targets.searchsorted(t - tol, "left")))
-        Q, V = st.dense.many(targets[:k]) if k else (None, None)
+        dense = st.dense
+        # (bisect: numpy's searchsorted costs more on the few targets a step covers)
+        n = 1 if dense is None else max(1, bisect_right(targets, t + tol))
+        k = 0 if dense is None else min(n, bisect_left(targets, t - tol))
+        Q, V = dense.many(targets[:k]) if k else (None, None)
         if k < n:                       # the step's own state for targets on its end
-            Qe, Ve = np.empty((n - k, len(st.q))), np.empty((n - k, len(st.V)))
-            Qe[:], Ve[:] = st.q, st.V
+            if k == n - 1:
+                Qe, Ve = np.array(st.q, float, ndmin=2), np.array(st.V, float, ndmin=2)
+            else:
+                Qe, Ve = np.empty((n - k, len(st.q))), np.empty((n - k, len(st.V)))
+                Qe[:], Ve[:] = st.q, st.V
             Q, V = (Qe, Ve) if not k else (np.concatenate([Q, Qe]), np.concatenate([V, Ve]))
         return n, Q, V
 
@@ -447,7 +453,7 @@ class Simulation:
         n_steps0 = self.n_steps
         ts, qs, Vs = [], [], []
         record_all = t_eval is None
-        targets = [t1] if record_all else [t for t in t_eval if t > t0]
+        targets = [t1] if record_all else t_eval[t_eval > t0]
         if record_all or (len(t_eval) and t_eval[0] == t0):
             ts.append(t0), qs.append(st.q.copy()), Vs.append(st.V.copy())
         bar = simulation_bar(progress, t0, t1, self, st)
@@ -464,7 +470,7 @@ class Simulation:
             hook = on_step if (record_all or bar.mode is not None) else None
         try:
             if not record_all:          # the outputs within a step in one dense call
-                targets, i = np.asarray(targets, float), 0
+                i = 0
                 while i < len(targets):
                     n, Q, V = self._advance_to_many(targets[i:], hook)
                     ts.extend(targets[i:i + n].tolist()), qs.extend(Q), Vs.extend(V)

@@ -173,6 +173,13 @@ class Constraints:
 
     def __init__(self, pin, model, data, joints, constraints, q0, prox_settings=None):
         self.pin, self.model, self.data, self.joints = pin, model, data, joints
+        if prox_settings is None and isinstance(constraints, list) and not constraints:
+            # none (a model wrapped afresh per run): Pinocchio's vectors and settings, slow
+            # to construct and unused without rows, are made on first access (__getattr__)
+            self.names, self.redundant_rows, self.anchored = [], [], []
+            self.n_all = self.n = 0
+            self.rows = np.arange(0)
+            return
         self.cms = pin.StdVec_RigidConstraintModel()
         self.cds = pin.StdVec_RigidConstraintData()
         self.names = []
@@ -214,6 +221,19 @@ class Constraints:
         self._cdata = model.createData()       # kinematics of g, A, γ (f keeps data)
         self._anchor_defaults(np.asarray(q0, float))
         init_dynamics(pin, model, data, self.cms, self.cds)
+
+    def __getattr__(self, name):
+        """``cms``, ``cds`` and ``prox`` of a constraint-free model, made on first use."""
+        if name == "cms":
+            value = self.pin.StdVec_RigidConstraintModel()
+        elif name == "cds":
+            value = self.pin.StdVec_RigidConstraintData()
+        elif name == "prox":
+            value = self.pin.ProximalSettings(1e-12, 1e-12, 50)
+        else:
+            raise AttributeError(name)
+        setattr(self, name, value)
+        return value
 
     def _anchor_defaults(self, q0):
         """A constraint to the world left at the default identity placement (the four-argument

@@ -36,8 +36,23 @@ from .rhs import build_f, f_numpy
 
 
 def _pin():
-    import pinocchio
-    return pinocchio
+    global _PIN
+    if _PIN is None:
+        import pinocchio
+        _PIN = pinocchio
+    return _PIN
+
+
+def _kernels():
+    """The compiled kernels (imported on first use: they import numba)."""
+    global _KERNELS
+    if _KERNELS is None:
+        from . import kernels
+        _KERNELS = kernels
+    return _KERNELS
+
+
+_PIN = _KERNELS = None
 
 
 #: smallest singular value of the constraint Jacobian A (twist coordinates), relative to its largest,
@@ -61,7 +76,12 @@ def _upper(n):
 def _check_pin_version(pin):
     """InputError on a Pinocchio older than MIN_PIN (2.x has other constraint classes and
     constructors), before anything is built."""
-    version = getattr(pin, "__version__", "0")
+    _check_version(getattr(pin, "__version__", "0"))
+
+
+@lru_cache(maxsize=4)
+def _check_version(version):
+    """(_check_pin_version on the version string, once per string.)"""
     try:
         found = tuple(int(x) for x in version.split(".")[:2])
     except ValueError:
@@ -172,9 +192,12 @@ class PinocchioModel(Model):
         if self.n_constraints:
             self._rank_constraints()
         if self.compiled:
-            from . import kernels
-            self._kernels = kernels
-            self._jt = kernels.joint_table(self.joints.roots, self.joints.planars, self.joints.zyx)
+            self._kernels = kernels = _kernels()
+            jt = self._memo.get("joint_table")           # (the joints' constant: made once per model)
+            if jt is None:
+                jt = self._memo["joint_table"] = kernels.joint_table(self.joints.roots, self.joints.planars,
+                                                                     self.joints.zyx)
+            self._jt = jt
             self._kW, self._kv = kernels.work_array(self._jt, self.nv)
             self.f, f_engine = build_f(self, kernels)
             self._f_compiled = self.f
@@ -306,7 +329,6 @@ class PinocchioModel(Model):
         indefinite (e.g. links with zero inertia, as in example-robot-data's iCub and Romeo),
         naming the joints; with constraints, on the motions they allow. Called by
         :func:`lgt_bridge.simulate.simulate` before the first step."""
-        from lgt_bridge.validation import mass_defects
         q = np.asarray(q, float)
         # a model wrapped afresh for each run is checked once per configuration while the
         # pinocchio.Model is unchanged (model_memo compares it with a copy)
@@ -314,6 +336,7 @@ class PinocchioModel(Model):
         key = q.tobytes()
         if memo is not None and key in memo["mass_ok"] and self.model == memo["copy"]:
             return
+        from lgt_bridge.validation import mass_defects
         M = self._crba(q)
         A = None
         if self.n_constraints:

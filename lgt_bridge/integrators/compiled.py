@@ -40,7 +40,9 @@ class CompiledProblem(LocalProblem):
         self._fs, self._vs = model.f, self._V
         eng = getattr(model, "engine_velocity", None)
         if eng is not None and len(eng.bodies):
-            self._I = self._engine_tables(tuple(int(b) for b in eng.bodies))
+            bodies = eng.bodies
+            got = self._engine_I.get(bodies) if type(bodies) is tuple else None    # (made before)
+            self._I = got if got is not None else self._engine_tables(tuple(int(b) for b in bodies))
             self._fs, self._vs = eng.f, w[self._ve_slice[0]:self._ve_slice[1]]
         self._Xd = np.zeros(self.nX)
         self._W0_src = None            # the array last copied into the W0 slot

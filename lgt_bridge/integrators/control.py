@@ -12,20 +12,31 @@ def rms(y):
     return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
 
 
+def _rms1(v):
+    """rms of a 1-D vector."""
+    return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
+
+
 def initial_step(rates, nX, W, t, rtol, atol, order, f0=None):
     """Hairer–Nørsett–Wanner's starting step (Solving ODEs I, II.4) on y = (X, W) from
     X = 0, for a method whose error estimate is of order ``order - 1`` (the step is
     ``(0.01 / max(d1, d2))^(1/order)``). ``rates(X, W, t)`` is the local ODE's [Ẋ, Ẇ] (None
     when not finite); ``f0`` its value at the start, when known."""
-    y0 = np.concatenate([np.zeros(nX), W])
+    # (each numpy call on these short vectors costs about as much as its arithmetic: as few
+    # as the rule allows, every value as the rule writes it)
+    y0 = np.zeros(nX + len(W))
+    y0[nX:] = W
     f0 = rates(np.zeros(nX), W, t) if f0 is None else f0
     sc = atol + rtol * np.abs(y0)
-    d0, d1 = rms(y0 / sc), rms(f0 / sc)
+    d0, d1 = _rms1(y0 / sc), _rms1(f0 / sc)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    f1 = rates(h0 * f0[:nX], W + h0 * f0[nX:], t + h0)
+    hf = h0 * f0
+    f1 = rates(hf[:nX], W + hf[nX:], t + h0)
     if f1 is None:
         return h0
-    d2 = rms((f1 - f0) / sc) / h0
+    f1 -= f0
+    f1 /= sc
+    d2 = _rms1(f1) / h0
     h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / order)
     return min(100 * h0, h1)
 

@@ -50,17 +50,23 @@ class BodySet:
 
 def analysis(model, group, chart, analyze):
     """``analyze(model, group, chart)``, computed once per layout and (group, chart): kept
-    on the model with the layout it was made for (repeated runs of one model skip it; a
-    model given a new layout is analyzed again), and shared by models of equal layouts (a
-    model built afresh for each call, as a new PinocchioModel per run of one robot, finds
-    it there). ``analyze`` must read nothing of the model but its layout."""
+    on the layout object (repeated runs of one model skip it, and so do models wrapped
+    afresh that share their engine model's layout, as a new PinocchioModel per run of one
+    robot; a model given a new layout is analyzed again; on the model with its layout when
+    the layout takes no attributes), and shared by models of equal layouts. ``analyze``
+    must read nothing of the model but its layout."""
     key = (analyze.__qualname__, _key(group), _key(chart))
     lay = model.layout
-    memo = getattr(model, "__dict__", None)
+    # kept on the layout object (models wrapped afresh share their engine model's layout), or
+    # on the model with its layout when the layout takes no attributes
+    memo = getattr(lay, "__dict__", None)
+    on_layout = memo is not None
+    if not on_layout:
+        memo = getattr(model, "__dict__", None)
     if memo is not None:
-        got = memo.get("_lgt_analysis", {}).get(key)
-        if got is not None and got[0] is lay:
-            return got[1]
+        got = memo.get("_lgt_analysis", _EMPTY).get(key)
+        if got is not None and (on_layout or got[0] is lay):
+            return got if on_layout else got[1]
     shared = key + (_layout_key(lay),)
     a = _SHARED.get(shared)
     if a is None:
@@ -68,11 +74,12 @@ def analysis(model, group, chart, analyze):
         if len(_SHARED) >= _SHARED_MAX:
             _SHARED.pop(next(iter(_SHARED)))
         _SHARED[shared] = a
-    if memo is not None:
-        memo.setdefault("_lgt_analysis", {})[key] = (lay, a)
+    if memo is not None:             # (the layout keeps no reference to itself: no cycle)
+        memo.setdefault("_lgt_analysis", {})[key] = a if on_layout else (lay, a)
     return a
 
 
+_EMPTY = {}
 #: analyses by layout content, shared by models of equal layouts (oldest dropped first)
 _SHARED = {}
 _SHARED_MAX = 32

@@ -6,7 +6,13 @@ from .local import LocalProblem
 
 def make_problem(model, group="SE3", chart="exp", backend=None):
     """The local problem on the selected backend (:mod:`lgt_bridge.backend`)."""
+    global _COMPILED
     if _backend.compiled(backend):
-        from .compiled import CompiledProblem
-        return CompiledProblem(model, group, chart)
+        if _COMPILED is None:              # (imported on first use: it imports numba)
+            from .compiled import CompiledProblem
+            _COMPILED = CompiledProblem
+        return _COMPILED(model, group, chart)
     return LocalProblem(model, group, chart)
+
+
+_COMPILED = None

@@ -40,8 +40,10 @@ def _stage_coefficients(tableau):
     if got is None or got[0] is not tableau:
         if len(_COEFFICIENTS) > 64:          # tableaux made per call (fixed forms): keep it small
             _COEFFICIENTS.clear()
+        c = [float(x) for x in tableau.c]
+        ends = [i for i in range(tableau.stages) if c[i] == 1.0]
         got = _COEFFICIENTS[key] = (tableau, [np.ascontiguousarray(row, dtype=float) for row in tableau.A],
-                                    np.ascontiguousarray(tableau.b, dtype=float), [float(x) for x in tableau.c])
+                                    np.ascontiguousarray(tableau.b, dtype=float), c, ends[-1] if ends else 0)
     return got[1:]
 
 
@@ -83,12 +85,11 @@ class ExplicitRK(Stepper):
         self._BX, self._BW = np.zeros((2, ns, problem.nX)), np.zeros((2, ns, problem.nv))
         self._bufs = [(self._BX[k], self._BW[k]) for k in range(2)]
         self.KX, self.KW = self._bufs[0]
-        self._A, self._b, self._c = _stage_coefficients(tableau)
+        # (_i_end: the stage nearest the step's end)
+        self._A, self._b, self._c, self._i_end = _stage_coefficients(tableau)
         self._fsal = False                     # KW[0] holds the first stage of the next step
         self.climit = 1.0 if problem.bounded else np.inf     # stage chart usage |x|/limit
         self._last_KW = None                   # the stages' Ẇ of the last accepted step
-        ends = [i for i in range(tableau.stages) if self._c[i] == 1.0]
-        self._i_end = ends[-1] if ends else 0  # the stage nearest the step's end
 
     def set_state(self, q, V, W=None, quats=None, copy=True):
         super().set_state(q, V, W, quats, copy)
