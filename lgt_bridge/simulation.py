@@ -310,8 +310,8 @@ class Simulation:
         the same steps), else :meth:`_step` by :meth:`_step`."""
         loop = None
         if self._use_loop and getattr(self.stepper.prob, "compiled", False):
-            from .integrators import compiled_loop          # (imports numba: not on the numpy backend)
-            loop = compiled_loop.of(self)
+            from .integrators.compiled_loop import of       # (numba: not on the numpy backend)
+            loop = of(self)
         if loop is not None:
             return loop.run(self, stop, on_step)
         tol = 1e-12 * max(1.0, abs(stop))

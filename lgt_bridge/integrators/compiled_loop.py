@@ -53,21 +53,25 @@ def of(sim):
     return loop
 
 
-_CONSTANTS = {}
+_PROTOTYPES = {}
 
 
-def _constants(st):
-    """(C's entries fixed by the stepper's tableau and class, TA: A, c and the pair's rows),
-    made once per tableau."""
-    tab = st.tab
-    got = _CONSTANTS.get(id(tab))
+def _prototype(st):
+    """(the loop array with C's fixed entries and the tableau filled in, its layout), made
+    once per tableau, sizes and tolerances (a run's set-up is part of every call)."""
+    prob, tab = st.prob, st.tab
+    key = (id(tab), st._BX.shape, st._BW.shape, prob._n_end, len(prob.bt), st.rtol, st.atol, st.climit)
+    got = _PROTOTYPES.get(key)
     if got is None or got[0] is not tab:
         ns = tab.stages
         A = np.zeros((ns, ns))
         for i, row in enumerate(st._A):
             A[i, :len(row)] = row
-        TA = np.ascontiguousarray(np.vstack([A, np.asarray(st._c, float)[None], st._T]))
-        C, ctl = np.zeros(_s.NC), st.control
+        TA = np.vstack([A, np.asarray(st._c, float)[None], st._T])
+        lay, size = _s.layout(ns, len(TA), st._BX.shape[1], prob.nX, prob.nv, prob._n_end + 4 * len(prob.bt))
+        L = np.zeros(size)
+        C, ctl = L[:_s.NC], st.control
+        C[_s.OS:_s.NBUF + 1] = lay
         C[_s.ALPHA], C[_s.BETA], C[_s.FACMIN], C[_s.FACMAX] = ctl.alpha, ctl.beta, ctl.facmin, ctl.facmax
         C[_s.ORDER], C[_s.SAFETY] = ctl.order, ctl.SAFETY
         C[_s.LANDING], C[_s.GROWS] = st.landing_steps, 1.0 if st.landing_grows else 0.0
@@ -76,9 +80,11 @@ def _constants(st):
         C[_s.HASE3] = tab.e3 is not None
         C[_s.TABFSAL] = bool(tab.fsal)
         C[_s.NSTAGES] = ns
-        if len(_CONSTANTS) > 16:
-            _CONSTANTS.clear()
-        got = _CONSTANTS[id(tab)] = (tab, C, TA)
+        C[_s.RTOL], C[_s.ATOL], C[_s.CLIMIT], C[_s.NY] = st.rtol, st.atol, st.climit, st._n
+        L[lay[1]:lay[2]] = TA.ravel()
+        if len(_PROTOTYPES) > 32:
+            _PROTOTYPES.clear()
+        got = _PROTOTYPES[key] = (tab, L, lay)
     return got[1:]
 
 
@@ -88,29 +94,23 @@ class Loop:
     the stepper's stage buffers, which become views of it."""
 
     def __init__(self, st):
-        prob = st.prob
-        C0, TA = _constants(st)
-        nbuf = st._BX.shape[1]
-        self.n_end = prob._n_end
-        lay, size = _s.layout(st.tab.stages, len(TA), nbuf, prob.nX, prob.nv, prob._n_end + 4 * len(prob.bt))
-        self.L = L = np.zeros(size)
-        self.C = C = L[:_s.NC]
-        C[:] = C0
-        C[_s.OS:_s.NBUF + 1] = lay
-        C[_s.RTOL], C[_s.ATOL], C[_s.CLIMIT], C[_s.NY] = st.rtol, st.atol, st.climit, st._n
+        L0, lay = _prototype(st)
+        self.n_end = st.prob._n_end
+        self.L = L = L0.copy()
+        self.C = L[:_s.NC]
         o_s, o_ta, o_bx, o_bw = lay[:4]
         self.S = L[o_s:o_ta]
-        L[o_ta:o_bx] = TA.ravel()
         # the stepper's buffers as views of L (their contents and which set is current kept)
         BX, BW = L[o_bx:o_bw].reshape(st._BX.shape), L[o_bw:].reshape(st._BW.shape)
         BX[:], BW[:] = st._BX, st._BW
-        cur = 0 if st.KX is st._bufs[0][0] else 1
-        last = next((k for k in range(2) if st._last_KW is st._bufs[k][1]), None)
+        bufs = st._bufs
+        cur = 0 if st.KX is bufs[0][0] else 1
+        last = 0 if st._last_KW is bufs[0][1] else 1 if st._last_KW is bufs[1][1] else None
         st._BX, st._BW = BX, BW
-        st._bufs = [(BX[k], BW[k]) for k in range(2)]
-        st.KX, st.KW = st._bufs[cur]
+        st._bufs = bufs = [(BX[0], BW[0]), (BX[1], BW[1])]
+        st.KX, st.KW = bufs[cur]
         if last is not None:
-            st._last_KW = st._bufs[last][1]
+            st._last_KW = bufs[last][1]
         self.runs = 0                          # calls of run (tests: the loop was used)
 
     def _load(self, sim, stop, each):

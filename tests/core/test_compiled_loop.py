@@ -141,3 +141,22 @@ def test_only_where_it_applies():
     assert compiled_loop.of(Simulation(scenes.heavy_top(False), method="rkmk4", dt=0.01)) is None
     assert compiled_loop.of(Simulation(scenes.heavy_top(True), method="dop853")) is None
     assert compiled_loop.of(Simulation(scenes.heavy_top(False), method="dop853")) is not None
+
+
+def test_switching_loops_between_horizons_keeps_the_steps():
+    """Horizons run alternately by the Python loop and the compiled one (the loop made after
+    Python steps takes over the stepper's stage buffers, FSAL stage and dense output) equal
+    a run by the Python loop alone."""
+    def horizons(sim, switch):
+        out = []
+        for k in range(1, 9):
+            if switch:
+                sim._use_loop = k % 2 == 0
+            out.append(sim.run(0.1 * k, t_eval=[0.1 * k - 0.05, 0.1 * k]))
+        return out
+    ref = Simulation(MODELS["heavy top"](), method="dop853", rtol=1e-9, atol=1e-9)
+    ref._use_loop = False
+    mixed = Simulation(MODELS["heavy top"](), method="dop853", rtol=1e-9, atol=1e-9)
+    for a, b in zip(horizons(mixed, True), horizons(ref, False)):
+        _same(a, b)
+    assert _loop_runs(mixed) >= 4
