@@ -47,19 +47,26 @@ def attempt_discontinuous(sim, h, post):
     retried at a quarter of its length, from its start and with the states of its start,
     until it is no longer than ``sim.h_event`` (nor ``sim.min_step``); that short step is
     then redone with the new states (as Exudyn's discontinuous iteration redoes its Newton
-    step), up to ``sim.MAX_DISCONTINUOUS`` times. ``REDO`` redoes the step at its length at
-    once, as Exudyn iterates; states that still move after MAX_DISCONTINUOUS redos shorten
-    the step as a switch does (Exudyn's ``ignoreMaxIterations = False``). Returns the
-    stepper's (accepted, h_new)."""
+    step), up to ``max_discontinuous`` times (the model's attribute, else
+    ``sim.MAX_DISCONTINUOUS``). ``REDO`` redoes the step at its length at once, as Exudyn
+    iterates; states that still move after those redos are kept and the step accepted when
+    the model's ``ignore_max_discontinuous`` is true (Exudyn's default
+    ``ignoreMaxIterations = True``: a friction direction flipping at every redo of a sticking
+    wheel), else they shorten the step as a switch does (``ignoreMaxIterations = False``).
+    Returns the stepper's (accepted, h_new)."""
     st, m, t = sim.stepper, sim.model, sim.t
     snap, d0 = st.snapshot(), m.discontinuous_state()
     floor = max(sim.h_event, sim.min_step)
+    n_max = int(getattr(m, "max_discontinuous", sim.MAX_DISCONTINUOUS))
+    ignore = bool(getattr(m, "ignore_max_discontinuous", False))
     accepted, h_new = st.attempt(t, h)
-    for k in range(sim.MAX_DISCONTINUOUS + 1):
+    for k in range(n_max + 1):
         changed = post(st.q, st.V, t + h) if accepted else False
         if not changed:
             break
-        last = k == sim.MAX_DISCONTINUOUS          # REDO without settling: shorten the step too
+        last = k == n_max
+        if last and changed == REDO and ignore:             # unsettled: kept, as Exudyn does
+            break
         if (changed != REDO or last) and h > floor:         # a switch within the step: locate it
             st.restore(snap)
             m.set_discontinuous_state(d0)

@@ -30,7 +30,11 @@ class StepHooks:
         if self.sd.DataSize():
             self.post_step = self._post_newton
             s = settings if settings is not None else engine.exu.SimulationSettings()
-            self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
+            disc = s.timeIntegration.discontinuous
+            self._disc_tol = float(disc.iterationTolerance)
+            # unsettled states after maxIterations redos: kept (ignoreMaxIterations) or the step cut
+            self.max_discontinuous = max(0, int(disc.maxIterations))
+            self.ignore_max_discontinuous = bool(disc.ignoreMaxIterations)
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
             note_lagged_objects(mbs)
             refuse_impact_models(mbs)

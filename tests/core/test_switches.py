@@ -128,3 +128,16 @@ def test_states_that_never_settle_shorten_the_step():
     s.h_event = 0.02 / 16
     r = s.run(0.1, t_eval=[0.1])
     assert r.success and r.stats["n_steps"] >= 0.1 / s.h_event - 1
+
+
+def test_states_that_never_settle_are_kept_when_the_model_ignores_max_iterations():
+    """A model with ``ignore_max_discontinuous`` (Exudyn's default ignoreMaxIterations = True)
+    keeps the step after ``max_discontinuous`` redos: rkmk4 takes its 5 steps of 0.02, each
+    solved 1 + 3 times (the same model without the flag shortens them to h_event, above)."""
+    m = _Lagged("never")
+    m.max_discontinuous, m.ignore_max_discontinuous = 3, True
+    s = Simulation(m, method="rkmk4", dt=0.02)
+    s.h_event = 0.02 / 16
+    r = s.run(0.1, t_eval=[0.1])
+    assert r.success and r.stats["n_steps"] == 5
+    assert m.calls == 5 * 4

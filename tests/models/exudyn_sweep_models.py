@@ -24,7 +24,9 @@ assembled.
   sideways, whose friction reads the slip velocity its PostNewton stored at the last step's
   end: the states move at every step without switching;
 - a hanger sliding along an ANCF cable through an ObjectJointSliding2D (Exudyn's
-  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate.
+  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate;
+- a board on two wheels on RollingDiscPenalty contacts whose friction direction never
+  settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py).
 """
 import numpy as np
 
@@ -290,3 +292,31 @@ def slider_on_cable(t_end=0.05, n=100):
                                        slidingMarkerOffsets=[i * le for i in range(n_el)], nodeNumber=data))
     mbs.Assemble()
     return mbs, settings(t_end, n), node
+
+
+def penalty_two_wheeler(t_end=0.1, n=50):
+    """(mbs, settings, wheel body): Exudyn's createRollingDiscPenaltyTest.py as written: a
+    board on two wheels (CreateRigidBody, CreateRevoluteJoint) rolling at 4 rev/s on the
+    ground through two CreateRollingDiscPenalty contacts (k = 1e5, d = 1e3, dry friction 0.4,
+    no proportional zone), Exudyn's default discontinuous settings (maxIterations 5,
+    ignoreMaxIterations True): the friction direction of a sticking wheel flips at every
+    discontinuous iteration and never settles."""
+    from exudyn.utilities import InertiaCuboid, ObjectGround, RigidBodyInertia
+    mbs = _system()
+    g, m, r, L = [0, 0, -9.81], 0.5, 0.1, 0.8
+    omega0 = [0, 4 * 2 * np.pi, 0]
+    v0 = Skew(omega0) @ [0, 0, r]
+    ring = RigidBodyInertia(mass=1, inertiaTensor=np.diag([0.25 * m * r**2, 0.5 * m * r**2, 0.25 * m * r**2]))
+    wheels = [mbs.CreateRigidBody(referencePosition=[x, 0, r], initialVelocity=v0, initialAngularVelocity=omega0,
+                                  inertia=ring, gravity=g) for x in (-0.5 * L, 0.5 * L)]
+    board = mbs.CreateRigidBody(referencePosition=[0, 0, 1.2 * r], initialVelocity=v0,
+                                inertia=InertiaCuboid(2800, sideLengths=[L, 0.5 * r, 0.5 * r]), gravity=g)
+    ground = mbs.AddObject(ObjectGround())
+    for w in wheels:
+        mbs.CreateRevoluteJoint(bodyNumbers=[w, board], position=[0, 0, 0], axis=[0, 1, 0], useGlobalFrame=False)
+        mbs.CreateRollingDiscPenalty(bodyNumbers=[ground, w], axisPosition=[0, 0, 0], axisVector=[0, 1, 0],
+                                     discRadius=r, contactStiffness=1e5, contactDamping=1e3, dryFriction=[0.4, 0.4])
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.newton.useModifiedNewton = True
+    return mbs, s, wheels[0]
