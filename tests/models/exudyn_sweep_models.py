@@ -26,7 +26,9 @@ assembled.
 - a hanger sliding along an ANCF cable through an ObjectJointSliding2D (Exudyn's
   ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate;
 - a board on two wheels on RollingDiscPenalty contacts whose friction direction never
-  settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py).
+  settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py);
+- a spring-damper replicated by a LoadCoordinate that a PreNewtonResidualUserFunction sets
+  from the state (Exudyn's mainSystemUserFunctionsTest.py).
 """
 import numpy as np
 
@@ -320,3 +322,37 @@ def penalty_two_wheeler(t_end=0.1, n=50):
     s = settings(t_end, n)
     s.timeIntegration.newton.useModifiedNewton = True
     return mbs, s, wheels[0]
+
+
+def residual_spring(t_end=0.5, n=500, raising=False):
+    """(mbs, settings, node): Exudyn's mainSystemUserFunctionsTest.py, case
+    ReplicateSpringDamper: a 4 kg Mass1D started 0.2 m out on a spring-damper (k = 12000,
+    d = 20) that is no object but a LoadCoordinate whose load a PreNewtonResidualUserFunction
+    sets from the node's displacement and velocity, with the SystemJacobianUserFunction of
+    that force; ``raising``: the residual function fails (a typo) after t = 0.1."""
+    from exudyn.utilities import LoadCoordinate, Mass1D, Node1D
+    mbs, k, d = _system(), 12000.0, 20.0
+    node = mbs.AddNode(Node1D(referenceCoordinates=[0], initialCoordinates=[0.2]))
+    mbs.AddObject(Mass1D(nodeNumber=node, mass=4.0, referencePosition=[0, 1.2, 0]))
+    marker = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    load = mbs.AddLoad(LoadCoordinate(markerNumber=marker, load=0))
+    mbs.Assemble()
+
+    def residual(mbs, t, newtonIt, discontinuousIt):
+        if raising and t > 0.1:
+            return mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinate)    # the user's typo
+        u = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)
+        v = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t)
+        mbs.SetLoadParameter(load, "load", (-k * u - d * v))
+    mbs.SetPreNewtonResidualUserFunction(residual)
+    row = mbs.GetNodeODE2Index(node)
+
+    def jacobian(mbs, t, factorODE2, factorODE2_t, factorODE1):
+        mc = exu.MatrixContainer()
+        mc.SetWithSparseMatrix([[row, row, -factorODE2 * k - factorODE2_t * d]], 1, 1)
+        return mc
+    mbs.SetSystemJacobianUserFunction(jacobian)
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+    return mbs, s, node
