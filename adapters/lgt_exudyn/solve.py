@@ -287,6 +287,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     accelerations = reads["accelerations"] if accelerations is None else accelerations
     multipliers = reads["multipliers"]
     solver = exu.MainSolverImplicitSecondOrder()
+    if storeSolver:             # before the run, as Exudyn: user functions read it (its step size)
+        mbs.sys["dynamicSolver"], mbs.sys["simulationSettings"] = solver, simulationSettings
     solver.SetUserFunctionNewton(mbs, newton)
     saved = [(ti, "automaticStepSize", auto_step)]
     ti.automaticStepSize = False                 # Exudyn steps at the output interval

@@ -28,7 +28,10 @@ assembled.
 - a board on two wheels on RollingDiscPenalty contacts whose friction direction never
   settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py);
 - a spring-damper replicated by a LoadCoordinate that a PreNewtonResidualUserFunction sets
-  from the state (Exudyn's mainSystemUserFunctionsTest.py).
+  from the state (Exudyn's mainSystemUserFunctionsTest.py);
+- a mass bouncing on a contact spring that a PostNewtonUserFunction switches through a data
+  coordinate, reading Exudyn's step size from ``mbs.sys['dynamicSolver']`` (Exudyn's
+  postNewtonStepContactTest.py).
 """
 import numpy as np
 
@@ -355,4 +358,53 @@ def residual_spring(t_end=0.5, n=500, raising=False):
     mbs.Assemble()
     s = settings(t_end, n)
     s.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+    return mbs, s, node
+
+
+def post_newton_contact(t_end=0.5, n=100):
+    """(mbs, settings, node): Exudyn's postNewtonStepContactTest.py: a 0.25 kg mass point
+    dropped at 1 m/s from 0.01 m above a contact spring (k = 20000) that a CoordinateSpringDamper's
+    force user function switches on while a data coordinate is 1; a PostNewtonUserFunction sets
+    it from the penetration and returns [error, recommended step] computed from the solver's
+    current step size (``mbs.sys['dynamicSolver'].it.currentStepSize``); the script's settings
+    (discontinuous maxIterations 1, ignoreMaxIterations False, minimumStepSize 1e-10, ...)."""
+    from exudyn.utilities import LoadCoordinate, Point
+    mbs, L, r, g, m, k = _system(), 0.5, 0.05, 9.81, 0.25, 20000.0
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[0], numberOfDataCoordinates=1))
+    node = mbs.AddNode(Point(referenceCoordinates=[0, L, 0], initialCoordinates=[0, r - L + 0.01, 0],
+                             initialVelocities=[0, -1, 0]))
+
+    def spring_force(mbs, t, itemIndex, u, v, k, d, offset, *args):
+        return k * (L + u - r) if mbs.systemData.GetDataCoordinates()[0] == 1 else 0
+
+    def post_newton(mbs, t):
+        Pos, SOS = exu.OutputVariableType.Position, exu.ConfigurationType.StartOfStep
+        p0 = mbs.GetNodeOutput(node, Pos, configuration=SOS)[1] - r
+        p = mbs.GetNodeOutput(node, Pos)[1] - r
+        h = mbs.sys["dynamicSolver"].it.currentStepSize
+        d = mbs.systemData.GetDataCoordinates()
+        d0 = mbs.systemData.GetDataCoordinates(configuration=SOS)
+        error, step = 0, -1
+        if (p < 0) == (d0[0] == 0):             # the contact closed or opened in this step
+            error = abs(p)
+            step = h * abs(p0) / (abs(p0) + abs(p)) if p0 > 0 else 0.25 * h
+            d[0] = 1 if p < 0 else 0
+        mbs.systemData.SetDataCoordinates(d)
+        return [error, step]
+    mbs.SetPostNewtonUserFunction(post_newton)
+    mbs.AddObject(MassPoint(physicsMass=m, nodeNumber=node))
+    ground = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    mn = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=1))
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, mn], stiffness=k, springForceUserFunction=spring_force))
+    mbs.AddLoad(LoadCoordinate(markerNumber=mn, load=-m * g))
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.discontinuous.iterationTolerance = 1e-8
+    s.timeIntegration.discontinuous.maxIterations = 1
+    s.timeIntegration.discontinuous.ignoreMaxIterations = False
+    s.timeIntegration.minimumStepSize = 1e-10
+    s.timeIntegration.adaptiveStepRecoverySteps = 0
+    s.timeIntegration.adaptiveStepIncrease = 10
+    s.timeIntegration.generalizedAlpha.spectralRadius = 1
     return mbs, s, node
