@@ -370,7 +370,7 @@ def post_newton_contact(t_end=0.5, n=100):
     (discontinuous maxIterations 1, ignoreMaxIterations False, minimumStepSize 1e-10, ...)."""
     from exudyn.utilities import LoadCoordinate, Point
     mbs, L, r, g, m, k = _system(), 0.5, 0.05, 9.81, 0.25, 20000.0
-    data = mbs.AddNode(NodeGenericData(initialCoordinates=[0], numberOfDataCoordinates=1))
+    mbs.AddNode(NodeGenericData(initialCoordinates=[0], numberOfDataCoordinates=1))
     node = mbs.AddNode(Point(referenceCoordinates=[0, L, 0], initialCoordinates=[0, r - L + 0.01, 0],
                              initialVelocities=[0, -1, 0]))
 
