@@ -36,7 +36,7 @@ def _note_once(key, text):
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
-                 method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
+                 method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=None,
                  project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn",
                  events=None):
     """Like ``exudyn.SolveDynamic``, integrated by the bridge with ``method``/``group``/``chart``.
@@ -80,7 +80,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     autoAssemble : bool, default True
         Call ``mbs.Assemble()`` first when the system is not consistent.
     method, group, chart, rho_inf, project
-        As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto").
+        As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto"); ``rho_inf``
+        None (default): the settings' ``generalizedAlpha.spectralRadius`` (Exudyn's
+        generalized-α has the same coefficients).
     rtol, atol : float, optional
         Override the settings' tolerances (a missing one comes from the settings, or, for
         dopri5/dop853 with automaticStepSize False, is the bridge's default rtol 1e-6 /
@@ -191,7 +193,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # in which it is found
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if (prestep or events is not None) else t1, project=project,
-                     rho_inf=rho_inf,
+                     rho_inf=float(ti.generalizedAlpha.spectralRadius if rho_inf is None else rho_inf),
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
