@@ -275,7 +275,8 @@ def mode_rows(mbs):
 
 
 def refuse_impact_models(mbs):
-    """InputError before any step for ObjectContactSphereSphere with impactModel 1 or 2: its
+    """InputError before any step for ObjectContactSphereSphere (or SphereTriangle) with
+    impactModel 1 or 2: its
     damping force uses the impact velocity data[2], which Exudyn's PostNewton rewrites at
     the end of every step, so the force depends on where the steps end and the model has no
     limit an error-controlled method converges to (a Newton's cradle: dopri5 at 1e-8 and
@@ -284,8 +285,10 @@ def refuse_impact_models(mbs):
         o = mbs.GetObject(k)
         if str(o.get("objectType", "")).removeprefix("Object") == "ContactSphereSphere" and \
                 int(o.get("impactModel", 0)) != 0:
+            # Exudyn 1.13 reports an ObjectContactSphereTriangle as ContactSphereSphere
+            kind = "ObjectContactSphereTriangle" if "trianglePoints" in o else "ObjectContactSphereSphere"
             raise InputError(
-                f"Exudyn object {k} {o.get('name', '')!r} (ObjectContactSphereSphere) has impactModel = "
+                f"Exudyn object {k} {o.get('name', '')!r} ({kind}) has impactModel = "
                 f"{int(o['impactModel'])}: its impact damping uses the impact velocity that Exudyn's "
                 "PostNewton stores at the end of each of its own steps, so the contact force depends on "
                 "the step sequence and lgt_bridge's steps would not converge to Exudyn's solution. Run "

@@ -29,6 +29,8 @@ assembled.
   settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py);
 - a spring-damper replicated by a LoadCoordinate that a PreNewtonResidualUserFunction sets
   from the state (Exudyn's mainSystemUserFunctionsTest.py);
+- a ball on a floor triangle through an ObjectContactSphereTriangle with an impact model
+  (Exudyn's sphereTriangleTest.py);
 - a mass bouncing on a contact spring that a PostNewtonUserFunction switches through a data
   coordinate, reading Exudyn's step size from ``mbs.sys['dynamicSolver']`` (Exudyn's
   postNewtonStepContactTest.py).
@@ -408,3 +410,22 @@ def post_newton_contact(t_end=0.5, n=100):
     s.timeIntegration.adaptiveStepIncrease = 10
     s.timeIntegration.generalizedAlpha.spectralRadius = 1
     return mbs, s, node
+
+
+def sphere_on_triangle(impact_model=2):
+    """(mbs, settings): Exudyn's sphereTriangleTest.py with one ball: a 0.1 m sphere
+    (CreateRigidBody) 1 cm above a floor triangle, ObjectContactSphereTriangle with
+    ``impact_model`` (restitution 0.5, friction 0.2, k = 1e5)."""
+    from exudyn.utilities import InertiaSphere, MarkerBodyRigid, ObjectContactSphereTriangle
+    mbs, r, a = _system(), 0.1, 0.25
+    ground = mbs.CreateGround()
+    ball = mbs.CreateRigidBody(referencePosition=[0.2, 0.2, 1.1 * r], initialVelocity=[1.2, 0, 0],
+                               inertia=InertiaSphere(mass=1.6, radius=r), gravity=[0, 0, -10])
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[0.1, 0, 0, 0], numberOfDataCoordinates=4))
+    mbs.AddObject(ObjectContactSphereTriangle(
+        markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball)), mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))],
+        nodeNumber=data, trianglePoints=exu.Vector3DList([[-a, -a, 0], [2 * a, -a, 0], [-a, 2 * a, 0]]),
+        sphereRadius=r, contactStiffness=1e5, dynamicFriction=0.2, impactModel=impact_model,
+        restitutionCoefficient=0.5))
+    mbs.Assemble()
+    return mbs, settings(0.1, 500)
