@@ -228,10 +228,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # state after each of its steps (repeating the step's call while that changes them),
     # which may lie before the bridge's last step and undo a switch the bridge has passed
     data = [np.array(sd.GetDataCoordinates()), None] if sd.DataSize() else None
+    # a pre-step user function may set data coordinates itself (a friction's stick state): the
+    # bridge's data are put back before it runs, so that its changes stay
+    user_prestep = _restore_data_before(mbs, data) if (prestep and data is not None) else None
 
     def newton(solver, mbs_, settings):
         t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h
-        if data is not None and t_out != data[1]:
+        if data is not None and t_out != data[1] and user_prestep is None:
             sd.SetDataCoordinates(data[0])
         try:
             if prestep:              # the model may have changed: no stage carried over
@@ -318,6 +321,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     finally:
         for obj, name, value in saved:
             setattr(obj, name, value)
+        if user_prestep is not None:
+            mbs.SetPreStepUserFunction(user_prestep)
         bar.close()
     if pending:
         raise pending[0]
@@ -422,6 +427,24 @@ def _outputs_read(mbs, settings):
         if sensor.get("sensorType") not in _KINEMATIC_SENSORS:
             acc = lam = True
     return {"accelerations": acc, "multipliers": lam}
+
+
+def _restore_data_before(mbs, data):
+    """Set the system's pre-step user function to one that puts the bridge's data coordinates
+    ``data[0]`` back and then calls the user's; returns the user's function (None when it is
+    not a Python function, which is then left as it is)."""
+    uf = mbs.GetPreStepUserFunction()
+    if isinstance(uf, dict):                # Exudyn 1.13: {'function': f, 'type': 'Python'}
+        uf = uf.get("function")
+    if not callable(uf):
+        return None
+    sd = mbs.systemData
+
+    def prestep(mbs_, t):
+        sd.SetDataCoordinates(data[0])
+        return uf(mbs_, t)
+    mbs.SetPreStepUserFunction(prestep)
+    return uf
 
 
 def _has_user_function(mbs, getter):

@@ -31,6 +31,8 @@ assembled.
   from the state (Exudyn's mainSystemUserFunctionsTest.py);
 - a ball on a floor triangle through an ObjectContactSphereTriangle with an impact model
   (Exudyn's sphereTriangleTest.py);
+- a mass pulled across a rough floor whose stick/slip state a pre-step user function keeps in
+  a data coordinate (Exudyn's lugreFrictionTest.py);
 - a mass bouncing on a contact spring that a PostNewtonUserFunction switches through a data
   coordinate, reading Exudyn's step size from ``mbs.sys['dynamicSolver']`` (Exudyn's
   postNewtonStepContactTest.py).
@@ -429,3 +431,55 @@ def sphere_on_triangle(impact_model=2):
         restitutionCoefficient=0.5))
     mbs.Assemble()
     return mbs, settings(0.1, 500)
+
+
+def prestep_stick_slip(t_end=1.5, n=3000, speed=1.0):
+    """(mbs, settings, node): Exudyn's lugreFrictionTest.py (its useLugrePos case), pulled
+    ``speed`` times faster: a 1 kg Mass1D on a rough floor, pulled by a spring (K = 2) whose
+    end moves at 0.1·speed m/s; the friction is a CoordinateSpringDamper force user function
+    reading a data coordinate [stick, sticking position]: a stiff bristle spring (1e5) while
+    sticking, a Stribeck force while slipping. A pre-step user function decides stick or slip
+    from the state and writes the data coordinates."""
+    from exudyn.utilities import Mass1D, Node1D
+    mbs, M, K, s0, s2, Fc, Fs, Vs = _system(), 1.0, 2.0, 1e5, 0.4, 1.0, 1.5, 1e-3
+    s1 = np.sqrt(s0)
+    node = mbs.AddNode(Node1D(referenceCoordinates=[0], initialCoordinates=[0.], initialVelocities=[0.]))
+    mbs.AddObject(Mass1D(nodeNumber=node, physicsMass=M))
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[1, 0], numberOfDataCoordinates=2))
+    mn = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    floor = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+
+    def friction(mbs, t, itemNumber, u, v, k, d, offset, *args):
+        d0 = mbs.GetNodeOutput(data, variableType=exu.OutputVariableType.Coordinates)
+        if d0[0] == 1:
+            F = s0 * (u - d0[1]) + s1 * v
+        else:
+            F = np.sign(v) * (Fc + (Fs - Fc) * np.exp(-(v / Vs) ** 2))
+        return d * v + F
+    rough = mbs.AddObject(CoordinateSpringDamper(markerNumbers=[floor, mn], stiffness=s0, damping=s2,
+                                                 springForceUserFunction=friction))
+    pull_node = mbs.AddNode(NodePointGround())
+    pull = mbs.AddObject(CoordinateSpringDamper(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=pull_node, coordinate=0)), mn], stiffness=K, damping=0))
+
+    def prestep(mbs, t):
+        U = 0.1 * speed * t
+        mbs.SetNodeParameter(pull_node, "referenceCoordinates", [U, 0., 0.])
+        mbs.SetObjectParameter(pull, "offset", U)
+        u = mbs.GetObjectOutput(rough, variableType=exu.OutputVariableType.Displacement)
+        v = mbs.GetObjectOutput(rough, variableType=exu.OutputVariableType.Velocity)
+        F = Fc + (Fs - Fc) * np.exp(-(v / Vs) ** 2)
+        d0 = mbs.systemData.GetDataCoordinates()
+        if d0[0] == 1 and abs(s0 * (u - d0[1]) + s1 * v) > F:
+            d0[0] = 0
+        elif d0[0] == 0 and (np.sign(v) != np.sign(F) or abs(s0 * (u - d0[1]) + s1 * v) < F):
+            d0[0] = 1
+        if d0[0] == 0:
+            d0[1] = u
+        mbs.systemData.SetDataCoordinates(d0)
+        return True
+    mbs.SetPreStepUserFunction(prestep)
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.absoluteTolerance = s.timeIntegration.relativeTolerance = 1e-6
+    return mbs, s, node
