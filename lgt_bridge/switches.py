@@ -38,6 +38,11 @@ _EPS = np.finfo(float).eps
 #: what a model's ``post_step`` returns when its discontinuous states moved without
 #: switching (an engine's friction direction, a penetration): redo the step with them
 REDO = "redo"
+#: states that never settle shorten the step down to this fraction of the run's step, where
+#: they are kept when the model ignores max iterations (keeping them at the full step: a
+#: rolling coin 5e-3 off Exudyn's result at any step; shortening to h_event: a car on two
+#: penalty wheels advanced 1e-8 s per step)
+UNSETTLED_CUT = 1.0 / 16
 
 
 def attempt_discontinuous(sim, h, post):
@@ -47,23 +52,34 @@ def attempt_discontinuous(sim, h, post):
     retried at a quarter of its length, from its start and with the states of its start,
     until it is no longer than ``sim.h_event`` (nor ``sim.min_step``); that short step is
     then redone with the new states (as Exudyn's discontinuous iteration redoes its Newton
-    step), up to ``sim.MAX_DISCONTINUOUS`` times. ``REDO`` redoes the step at its length at
-    once, as Exudyn iterates; states that still move after MAX_DISCONTINUOUS redos shorten
-    the step as a switch does (Exudyn's ``ignoreMaxIterations = False``). Returns the
-    stepper's (accepted, h_new)."""
+    step), up to ``max_discontinuous`` times (the model's attribute, else
+    ``sim.MAX_DISCONTINUOUS``). ``REDO`` redoes the step at its length at once, as Exudyn
+    iterates; states that still move after those redos shorten the step as a switch does
+    (Exudyn's ``ignoreMaxIterations = False``), but when the model's
+    ``ignore_max_discontinuous`` is true (Exudyn's default ``ignoreMaxIterations = True``: a
+    friction direction flipping at every redo of a sticking wheel) only down to
+    ``UNSETTLED_CUT`` of the run's step (``sim.dt``, else ``sim.max_step``), where they are
+    kept and the step accepted. Returns the stepper's (accepted, h_new)."""
     st, m, t = sim.stepper, sim.model, sim.t
     snap, d0 = st.snapshot(), m.discontinuous_state()
-    floor = max(sim.h_event, sim.min_step)
+    # a step no longer than the floor up to rounding is at the floor (a step landing on the end
+    # time may exceed it by an ulp: cut again, it lands on that same length, forever)
+    floor = max(sim.h_event, sim.min_step) * (1.0 + 1e-9)
+    n_max = int(getattr(m, "max_discontinuous", sim.MAX_DISCONTINUOUS))
+    ignore = bool(getattr(m, "ignore_max_discontinuous", False))
+    nominal = getattr(sim, "dt", None) or getattr(sim, "max_step", None) or h     # the run's step
     accepted, h_new = st.attempt(t, h)
-    for k in range(sim.MAX_DISCONTINUOUS + 1):
+    for k in range(n_max + 1):
         changed = post(st.q, st.V, t + h) if accepted else False
         if not changed:
             break
-        last = k == sim.MAX_DISCONTINUOUS          # REDO without settling: shorten the step too
+        last = k == n_max
+        if last and changed == REDO and ignore and h <= max(floor, UNSETTLED_CUT * nominal):
+            break                                           # unsettled: kept, as Exudyn does
         if (changed != REDO or last) and h > floor:         # a switch within the step: locate it
             st.restore(snap)
             m.set_discontinuous_state(d0)
-            return False, max(0.25 * h, floor)
+            return False, max(0.25 * h, max(sim.h_event, sim.min_step))
         if last:
             break
         st.restore(snap)

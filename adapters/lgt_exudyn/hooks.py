@@ -3,13 +3,14 @@ off by a pre-step user function (the constraint rows classified again), a constr
 moved (spread over the step as a time dependence), and the outputs of a written state (its
 accelerations and Lagrange multipliers for Exudyn's sensors and solution file); and the
 system facts they depend on: a pre-step user function, the contact gaps among the data
-coordinates, impact models the bridge refuses. :class:`StepHooks` is a part of
+coordinates, impact models the bridge refuses; and the system's pre-Newton residual user
+function, called before each residual (:class:`PreNewtonResidual`). :class:`StepHooks` is a part of
 :class:`~lgt_exudyn.model.ExudynModel`."""
 import warnings
 
 import numpy as np
 
-from lgt_bridge.errors import InputError, ModelNote
+from lgt_bridge.errors import InputError, ModelError, ModelNote
 
 from . import contact as _contact
 from .constraints import ConstraintRows
@@ -36,13 +37,35 @@ class StepHooks:
         if self.sd.DataSize():
             self.post_step = self._post_newton
             s = settings if settings is not None else engine.exu.SimulationSettings()
-            self._disc_tol = float(s.timeIntegration.discontinuous.iterationTolerance)
+            disc = s.timeIntegration.discontinuous
+            self._disc_tol = float(disc.iterationTolerance)
+            # unsettled states after maxIterations redos: kept (ignoreMaxIterations) or the step cut
+            self.max_discontinuous = max(0, int(disc.maxIterations))
+            self.ignore_max_discontinuous = bool(disc.ignoreMaxIterations)
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
             note_lagged_objects(mbs)
             refuse_impact_models(mbs)
             refuse_sliding_joints(mbs)
         elif _contact.count(mbs):
             self.switch_mode = _contact.ContactModes(self)
+
+    def _take_residual_user_function(self):
+        """The system's PreNewtonResidualUserFunction (``mbs.SetPreNewtonResidualUserFunction``),
+        called before each of the bridge's residuals (:class:`PreNewtonResidual`)."""
+        try:
+            uf = self.mbs.GetPreNewtonResidualUserFunction()
+        except Exception:                   # an Exudyn without system user functions
+            uf = None
+        if isinstance(uf, dict):            # Exudyn 1.13: {'function': f, 'type': 'Python'}
+            uf = uf.get("function")
+        if not uf:
+            return
+        if not callable(uf):
+            raise InputError(f"the system's PreNewtonResidualUserFunction ({type(uf).__name__}) cannot be "
+                             "called from Python; lgt_bridge calls it before each residual. Set a Python "
+                             "function with mbs.SetPreNewtonResidualUserFunction, or run the model with "
+                             "Exudyn's own exu.SolveDynamic.")
+        self.solver = PreNewtonResidual(self.solver, uf)
 
     def _connector_state(self):
         """What decides which AE rows are constraints and can be changed between steps:
@@ -258,7 +281,8 @@ def mode_rows(mbs):
 
 
 def refuse_impact_models(mbs):
-    """InputError before any step for ObjectContactSphereSphere with impactModel 1 or 2: its
+    """InputError before any step for ObjectContactSphereSphere (or SphereTriangle) with
+    impactModel 1 or 2: its
     damping force uses the impact velocity data[2], which Exudyn's PostNewton rewrites at
     the end of every step, so the force depends on where the steps end and the model has no
     limit an error-controlled method converges to (a Newton's cradle: dopri5 at 1e-8 and
@@ -267,8 +291,10 @@ def refuse_impact_models(mbs):
         o = mbs.GetObject(k)
         if str(o.get("objectType", "")).removeprefix("Object") == "ContactSphereSphere" and \
                 int(o.get("impactModel", 0)) != 0:
+            # Exudyn 1.13 reports an ObjectContactSphereTriangle as ContactSphereSphere
+            kind = "ObjectContactSphereTriangle" if "trianglePoints" in o else "ObjectContactSphereSphere"
             raise InputError(
-                f"Exudyn object {k} {o.get('name', '')!r} (ObjectContactSphereSphere) has impactModel = "
+                f"Exudyn object {k} {o.get('name', '')!r} ({kind}) has impactModel = "
                 f"{int(o['impactModel'])}: its impact damping uses the impact velocity that Exudyn's "
                 "PostNewton stores at the end of each of its own steps, so the contact force depends on "
                 "the step sequence and lgt_bridge's steps would not converge to Exudyn's solution. Run "
@@ -327,3 +353,30 @@ def general_contacts(mbs, located=True):
             "a system with data coordinates, whose discontinuous iteration runs instead), so a step across "
             "one meets the jump of the contact damping force. Use method='dopri5', 'dop853' or 'radau5' "
             "(switches located), loosen the tolerances, or use method='genalpha'.")
+
+
+class PreNewtonResidual:
+    """Exudyn's evaluator with the system's PreNewtonResidualUserFunction ``uf(mbs, t,
+    newtonIt, discontinuousIt)`` called before each ODE2 residual it computes, with the state
+    already written: Exudyn calls it before the residual of each Newton iteration, so that
+    loads it sets from the state (Exudyn's mainSystemUserFunctionsTest.py replicates a
+    spring-damper by a LoadCoordinate so set) act at every state the integrator evaluates
+    (without it the load kept its last value: the spring vanished). The bridge's
+    evaluations are no Newton iterations of Exudyn's: ``newtonIt`` and ``discontinuousIt``
+    are 0. An exception in ``uf`` becomes a ModelError naming the function and the time."""
+
+    def __init__(self, solver, uf):
+        self._solver, self._uf = solver, uf
+
+    def __getattr__(self, name):
+        return getattr(self._solver, name)
+
+    def ComputeODE2RHS(self, mbs):
+        t = mbs.systemData.GetTime()
+        try:
+            self._uf(mbs, t, 0, 0)
+        except Exception as exc:
+            raise ModelError(f"the system's PreNewtonResidualUserFunction raised at t = {t:.9g}: "
+                             f"{type(exc).__name__}: {exc}. Fix it (run the script with Exudyn's own "
+                             "solver to see it in context).") from exc
+        self._solver.ComputeODE2RHS(mbs)

@@ -72,6 +72,7 @@ class ExudynModel(StepHooks, Model):
         nodes = self.nodes = NodeLayout(mbs)
         engine = self.engine = Engine(mbs)
         self.mbs = mbs
+        self._take_residual_user_function()     # called before each residual (hooks.py)
         self.n2, self.nv, self.kinds, self.ref = nodes.n2, nodes.nv, nodes.kinds, engine.ref
         self._jac_zero = engine.jac_zero
         #: the compiled kernels run this model's conversions (the backend is read here, once)

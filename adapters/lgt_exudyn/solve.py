@@ -36,7 +36,7 @@ def _note_once(key, text):
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False,
                  storeSolver=True, showHints=False, showCausingItems=True, autoAssemble=True, *,
-                 method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=0.9,
+                 method="dopri5", group=DEFAULT_GROUP, chart="exp", rtol=None, atol=None, rho_inf=None,
                  project=True, verbose=None, accelerations=None, progress=None, max_step="exudyn",
                  events=None):
     """Like ``exudyn.SolveDynamic``, integrated by the bridge with ``method``/``group``/``chart``.
@@ -80,7 +80,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     autoAssemble : bool, default True
         Call ``mbs.Assemble()`` first when the system is not consistent.
     method, group, chart, rho_inf, project
-        As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto").
+        As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto"); ``rho_inf``
+        None (default): the settings' ``generalizedAlpha.spectralRadius`` (Exudyn's
+        generalized-α has the same coefficients).
     rtol, atol : float, optional
         Override the settings' tolerances (a missing one comes from the settings, or, for
         dopri5/dop853 with automaticStepSize False, is the bridge's default rtol 1e-6 /
@@ -191,7 +193,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # in which it is found
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if (prestep or events is not None) else t1, project=project,
-                     rho_inf=rho_inf,
+                     rho_inf=float(ti.generalizedAlpha.spectralRadius if rho_inf is None else rho_inf),
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
@@ -229,10 +231,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # state after each of its steps (repeating the step's call while that changes them),
     # which may lie before the bridge's last step and undo a switch the bridge has passed
     data = [np.array(sd.GetDataCoordinates()), None] if sd.DataSize() else None
+    # a pre-step user function may set data coordinates itself (a friction's stick state): the
+    # bridge's data are put back before it runs, so that its changes stay
+    user_prestep = _restore_data_before(mbs, data) if (prestep and data is not None) else None
 
     def newton(solver, mbs_, settings):
         t_out = sd.GetTime()                 # the step's end: Exudyn's start of step + h
-        if data is not None and t_out != data[1]:
+        if data is not None and t_out != data[1] and user_prestep is None:
             sd.SetDataCoordinates(data[0])
         try:
             if plain:                # an output the last bridge step covers: its state only
@@ -301,6 +306,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     plain = [model.writer()] if (sim.dense and rewrite_free and data is None
                                  and not (accelerations or multipliers)) else []
     solver = exu.MainSolverImplicitSecondOrder()
+    if storeSolver:             # before the run, as Exudyn: user functions read it (its step size)
+        mbs.sys["dynamicSolver"], mbs.sys["simulationSettings"] = solver, simulationSettings
     solver.SetUserFunctionNewton(mbs, newton)
     saved = [(ti, "automaticStepSize", auto_step)]
     ti.automaticStepSize = False                 # Exudyn steps at the output interval
@@ -328,6 +335,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     finally:
         for obj, name, value in saved:
             setattr(obj, name, value)
+        if user_prestep is not None:
+            mbs.SetPreStepUserFunction(user_prestep)
         bar.close()
     if pending:
         raise pending[0]
@@ -441,6 +450,24 @@ def _outputs_read(mbs, settings):
         if sensor.get("sensorType") not in _KINEMATIC_SENSORS:
             acc = lam = True
     return {"accelerations": acc, "multipliers": lam}
+
+
+def _restore_data_before(mbs, data):
+    """Set the system's pre-step user function to one that puts the bridge's data coordinates
+    ``data[0]`` back and then calls the user's; returns the user's function (None when it is
+    not a Python function, which is then left as it is)."""
+    uf = mbs.GetPreStepUserFunction()
+    if isinstance(uf, dict):                # Exudyn 1.13: {'function': f, 'type': 'Python'}
+        uf = uf.get("function")
+    if not callable(uf):
+        return None
+    sd = mbs.systemData
+
+    def prestep(mbs_, t):
+        sd.SetDataCoordinates(data[0])
+        return uf(mbs_, t)
+    mbs.SetPreStepUserFunction(prestep)
+    return uf
 
 
 def _has_user_function(mbs, getter):

@@ -128,3 +128,22 @@ def test_states_that_never_settle_shorten_the_step():
     s.h_event = 0.02 / 16
     r = s.run(0.1, t_eval=[0.1])
     assert r.success and r.stats["n_steps"] >= 0.1 / s.h_event - 1
+
+
+def test_states_that_never_settle_are_kept_when_the_model_ignores_max_iterations():
+    """A model with ``ignore_max_discontinuous`` (Exudyn's default ignoreMaxIterations = True)
+    shortens an unsettled step only down to UNSETTLED_CUT of the run's step and keeps it there:
+    rkmk4 at dt = 0.02 takes steps of 0.02/16 (80 over 0.1, a few more to land on the end:
+    measured 92), where the same model without the flag goes on to h_event (0.02/64: 320
+    steps; the last one, an ulp above h_event, was cut again forever)."""
+    steps = []
+    for ignore in (True, False):
+        m = _Lagged("never")
+        m.max_discontinuous, m.ignore_max_discontinuous = 3, ignore
+        s = Simulation(m, method="rkmk4", dt=0.02)
+        s.h_event = 0.02 / 64
+        r = s.run(0.1, t_eval=[0.1])
+        assert r.success
+        steps.append(r.stats["n_steps"])
+    n_cut = round(0.1 / (0.02 * switches.UNSETTLED_CUT))
+    assert n_cut <= steps[0] <= 1.2 * n_cut and steps[1] >= 0.1 / (0.02 / 64) - 1, steps

@@ -458,6 +458,15 @@ def test_impact_models_that_read_the_step_sequence_are_refused(impact_model):
     assert "exu.SolveDynamic" in msg and "impactModel = 0" in msg
 
 
+def test_a_sphere_triangle_impact_model_is_refused_by_its_own_name():
+    """Exudyn reports an ObjectContactSphereTriangle's type as ContactSphereSphere; the
+    refusal named the class the user had not written (Exudyn's sphereTriangleTest.py)."""
+    from exudyn_sweep_models import sphere_on_triangle
+    mbs, s = sphere_on_triangle(impact_model=2)
+    with pytest.raises(InputError, match=r"\(ObjectContactSphereTriangle\) has impactModel = 2"):
+        SolveDynamic(mbs, s, method="genalpha")
+
+
 def test_dopri5_on_a_stiff_ancf_cable_stops_within_two_thousand_steps():
     """The damped ANCF cable (8 elements, EA = 3.1e4 N) over 20 s: dopri5's steps sit at
     its stability limit (~1.8e-6 s, ρ ≈ 1.9e6 1/s): 1.1e7 steps. It used to run on for minutes;

@@ -24,7 +24,18 @@ assembled.
   sideways, whose friction reads the slip velocity its PostNewton stored at the last step's
   end: the states move at every step without switching;
 - a hanger sliding along an ANCF cable through an ObjectJointSliding2D (Exudyn's
-  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate.
+  ANCFslidingJoint2D.py): its third algebraic coordinate is the sliding coordinate;
+- a board on two wheels on RollingDiscPenalty contacts whose friction direction never
+  settles in Exudyn's discontinuous iteration (Exudyn's createRollingDiscPenaltyTest.py);
+- a spring-damper replicated by a LoadCoordinate that a PreNewtonResidualUserFunction sets
+  from the state (Exudyn's mainSystemUserFunctionsTest.py);
+- a ball on a floor triangle through an ObjectContactSphereTriangle with an impact model
+  (Exudyn's sphereTriangleTest.py);
+- a mass pulled across a rough floor whose stick/slip state a pre-step user function keeps in
+  a data coordinate (Exudyn's lugreFrictionTest.py);
+- a mass bouncing on a contact spring that a PostNewtonUserFunction switches through a data
+  coordinate, reading Exudyn's step size from ``mbs.sys['dynamicSolver']`` (Exudyn's
+  postNewtonStepContactTest.py).
 """
 import numpy as np
 
@@ -290,3 +301,185 @@ def slider_on_cable(t_end=0.05, n=100):
                                        slidingMarkerOffsets=[i * le for i in range(n_el)], nodeNumber=data))
     mbs.Assemble()
     return mbs, settings(t_end, n), node
+
+
+def penalty_two_wheeler(t_end=0.1, n=50):
+    """(mbs, settings, wheel body): Exudyn's createRollingDiscPenaltyTest.py as written: a
+    board on two wheels (CreateRigidBody, CreateRevoluteJoint) rolling at 4 rev/s on the
+    ground through two CreateRollingDiscPenalty contacts (k = 1e5, d = 1e3, dry friction 0.4,
+    no proportional zone), Exudyn's default discontinuous settings (maxIterations 5,
+    ignoreMaxIterations True): the friction direction of a sticking wheel flips at every
+    discontinuous iteration and never settles."""
+    from exudyn.utilities import InertiaCuboid, ObjectGround, RigidBodyInertia
+    mbs = _system()
+    g, m, r, L = [0, 0, -9.81], 0.5, 0.1, 0.8
+    omega0 = [0, 4 * 2 * np.pi, 0]
+    v0 = Skew(omega0) @ [0, 0, r]
+    ring = RigidBodyInertia(mass=1, inertiaTensor=np.diag([0.25 * m * r**2, 0.5 * m * r**2, 0.25 * m * r**2]))
+    wheels = [mbs.CreateRigidBody(referencePosition=[x, 0, r], initialVelocity=v0, initialAngularVelocity=omega0,
+                                  inertia=ring, gravity=g) for x in (-0.5 * L, 0.5 * L)]
+    board = mbs.CreateRigidBody(referencePosition=[0, 0, 1.2 * r], initialVelocity=v0,
+                                inertia=InertiaCuboid(2800, sideLengths=[L, 0.5 * r, 0.5 * r]), gravity=g)
+    ground = mbs.AddObject(ObjectGround())
+    for w in wheels:
+        mbs.CreateRevoluteJoint(bodyNumbers=[w, board], position=[0, 0, 0], axis=[0, 1, 0], useGlobalFrame=False)
+        mbs.CreateRollingDiscPenalty(bodyNumbers=[ground, w], axisPosition=[0, 0, 0], axisVector=[0, 1, 0],
+                                     discRadius=r, contactStiffness=1e5, contactDamping=1e3, dryFriction=[0.4, 0.4])
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.newton.useModifiedNewton = True
+    return mbs, s, wheels[0]
+
+
+def residual_spring(t_end=0.5, n=500, raising=False):
+    """(mbs, settings, node): Exudyn's mainSystemUserFunctionsTest.py, case
+    ReplicateSpringDamper: a 4 kg Mass1D started 0.2 m out on a spring-damper (k = 12000,
+    d = 20) that is no object but a LoadCoordinate whose load a PreNewtonResidualUserFunction
+    sets from the node's displacement and velocity, with the SystemJacobianUserFunction of
+    that force; ``raising``: the residual function fails (a typo) after t = 0.1."""
+    from exudyn.utilities import LoadCoordinate, Mass1D, Node1D
+    mbs, k, d = _system(), 12000.0, 20.0
+    node = mbs.AddNode(Node1D(referenceCoordinates=[0], initialCoordinates=[0.2]))
+    mbs.AddObject(Mass1D(nodeNumber=node, mass=4.0, referencePosition=[0, 1.2, 0]))
+    marker = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    load = mbs.AddLoad(LoadCoordinate(markerNumber=marker, load=0))
+    mbs.Assemble()
+
+    def residual(mbs, t, newtonIt, discontinuousIt):
+        if raising and t > 0.1:
+            return mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinate)    # the user's typo
+        u = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)
+        v = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t)
+        mbs.SetLoadParameter(load, "load", (-k * u - d * v))
+    mbs.SetPreNewtonResidualUserFunction(residual)
+    row = mbs.GetNodeODE2Index(node)
+
+    def jacobian(mbs, t, factorODE2, factorODE2_t, factorODE1):
+        mc = exu.MatrixContainer()
+        mc.SetWithSparseMatrix([[row, row, -factorODE2 * k - factorODE2_t * d]], 1, 1)
+        return mc
+    mbs.SetSystemJacobianUserFunction(jacobian)
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+    return mbs, s, node
+
+
+def post_newton_contact(t_end=0.5, n=100):
+    """(mbs, settings, node): Exudyn's postNewtonStepContactTest.py: a 0.25 kg mass point
+    dropped at 1 m/s from 0.01 m above a contact spring (k = 20000) that a CoordinateSpringDamper's
+    force user function switches on while a data coordinate is 1; a PostNewtonUserFunction sets
+    it from the penetration and returns [error, recommended step] computed from the solver's
+    current step size (``mbs.sys['dynamicSolver'].it.currentStepSize``); the script's settings
+    (discontinuous maxIterations 1, ignoreMaxIterations False, minimumStepSize 1e-10, ...)."""
+    from exudyn.utilities import LoadCoordinate, Point
+    mbs, L, r, g, m, k = _system(), 0.5, 0.05, 9.81, 0.25, 20000.0
+    mbs.AddNode(NodeGenericData(initialCoordinates=[0], numberOfDataCoordinates=1))
+    node = mbs.AddNode(Point(referenceCoordinates=[0, L, 0], initialCoordinates=[0, r - L + 0.01, 0],
+                             initialVelocities=[0, -1, 0]))
+
+    def spring_force(mbs, t, itemIndex, u, v, k, d, offset, *args):
+        return k * (L + u - r) if mbs.systemData.GetDataCoordinates()[0] == 1 else 0
+
+    def post_newton(mbs, t):
+        Pos, SOS = exu.OutputVariableType.Position, exu.ConfigurationType.StartOfStep
+        p0 = mbs.GetNodeOutput(node, Pos, configuration=SOS)[1] - r
+        p = mbs.GetNodeOutput(node, Pos)[1] - r
+        h = mbs.sys["dynamicSolver"].it.currentStepSize
+        d = mbs.systemData.GetDataCoordinates()
+        d0 = mbs.systemData.GetDataCoordinates(configuration=SOS)
+        error, step = 0, -1
+        if (p < 0) == (d0[0] == 0):             # the contact closed or opened in this step
+            error = abs(p)
+            step = h * abs(p0) / (abs(p0) + abs(p)) if p0 > 0 else 0.25 * h
+            d[0] = 1 if p < 0 else 0
+        mbs.systemData.SetDataCoordinates(d)
+        return [error, step]
+    mbs.SetPostNewtonUserFunction(post_newton)
+    mbs.AddObject(MassPoint(physicsMass=m, nodeNumber=node))
+    ground = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    mn = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=1))
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, mn], stiffness=k, springForceUserFunction=spring_force))
+    mbs.AddLoad(LoadCoordinate(markerNumber=mn, load=-m * g))
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.discontinuous.iterationTolerance = 1e-8
+    s.timeIntegration.discontinuous.maxIterations = 1
+    s.timeIntegration.discontinuous.ignoreMaxIterations = False
+    s.timeIntegration.minimumStepSize = 1e-10
+    s.timeIntegration.adaptiveStepRecoverySteps = 0
+    s.timeIntegration.adaptiveStepIncrease = 10
+    s.timeIntegration.generalizedAlpha.spectralRadius = 1
+    return mbs, s, node
+
+
+def sphere_on_triangle(impact_model=2):
+    """(mbs, settings): Exudyn's sphereTriangleTest.py with one ball: a 0.1 m sphere
+    (CreateRigidBody) 1 cm above a floor triangle, ObjectContactSphereTriangle with
+    ``impact_model`` (restitution 0.5, friction 0.2, k = 1e5)."""
+    from exudyn.utilities import InertiaSphere, MarkerBodyRigid, ObjectContactSphereTriangle
+    mbs, r, a = _system(), 0.1, 0.25
+    ground = mbs.CreateGround()
+    ball = mbs.CreateRigidBody(referencePosition=[0.2, 0.2, 1.1 * r], initialVelocity=[1.2, 0, 0],
+                               inertia=InertiaSphere(mass=1.6, radius=r), gravity=[0, 0, -10])
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[0.1, 0, 0, 0], numberOfDataCoordinates=4))
+    mbs.AddObject(ObjectContactSphereTriangle(
+        markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball)), mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))],
+        nodeNumber=data, trianglePoints=exu.Vector3DList([[-a, -a, 0], [2 * a, -a, 0], [-a, 2 * a, 0]]),
+        sphereRadius=r, contactStiffness=1e5, dynamicFriction=0.2, impactModel=impact_model,
+        restitutionCoefficient=0.5))
+    mbs.Assemble()
+    return mbs, settings(0.1, 500)
+
+
+def prestep_stick_slip(t_end=1.5, n=3000, speed=1.0):
+    """(mbs, settings, node): Exudyn's lugreFrictionTest.py (its useLugrePos case), pulled
+    ``speed`` times faster: a 1 kg Mass1D on a rough floor, pulled by a spring (K = 2) whose
+    end moves at 0.1·speed m/s; the friction is a CoordinateSpringDamper force user function
+    reading a data coordinate [stick, sticking position]: a stiff bristle spring (1e5) while
+    sticking, a Stribeck force while slipping. A pre-step user function decides stick or slip
+    from the state and writes the data coordinates."""
+    from exudyn.utilities import Mass1D, Node1D
+    mbs, M, K, s0, s2, Fc, Fs, Vs = _system(), 1.0, 2.0, 1e5, 0.4, 1.0, 1.5, 1e-3
+    s1 = np.sqrt(s0)
+    node = mbs.AddNode(Node1D(referenceCoordinates=[0], initialCoordinates=[0.], initialVelocities=[0.]))
+    mbs.AddObject(Mass1D(nodeNumber=node, physicsMass=M))
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[1, 0], numberOfDataCoordinates=2))
+    mn = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
+    floor = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+
+    def friction(mbs, t, itemNumber, u, v, k, d, offset, *args):
+        d0 = mbs.GetNodeOutput(data, variableType=exu.OutputVariableType.Coordinates)
+        if d0[0] == 1:
+            F = s0 * (u - d0[1]) + s1 * v
+        else:
+            F = np.sign(v) * (Fc + (Fs - Fc) * np.exp(-(v / Vs) ** 2))
+        return d * v + F
+    rough = mbs.AddObject(CoordinateSpringDamper(markerNumbers=[floor, mn], stiffness=s0, damping=s2,
+                                                 springForceUserFunction=friction))
+    pull_node = mbs.AddNode(NodePointGround())
+    pull = mbs.AddObject(CoordinateSpringDamper(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=pull_node, coordinate=0)), mn], stiffness=K, damping=0))
+
+    def prestep(mbs, t):
+        U = 0.1 * speed * t
+        mbs.SetNodeParameter(pull_node, "referenceCoordinates", [U, 0., 0.])
+        mbs.SetObjectParameter(pull, "offset", U)
+        u = mbs.GetObjectOutput(rough, variableType=exu.OutputVariableType.Displacement)
+        v = mbs.GetObjectOutput(rough, variableType=exu.OutputVariableType.Velocity)
+        F = Fc + (Fs - Fc) * np.exp(-(v / Vs) ** 2)
+        d0 = mbs.systemData.GetDataCoordinates()
+        if d0[0] == 1 and abs(s0 * (u - d0[1]) + s1 * v) > F:
+            d0[0] = 0
+        elif d0[0] == 0 and (np.sign(v) != np.sign(F) or abs(s0 * (u - d0[1]) + s1 * v) < F):
+            d0[0] = 1
+        if d0[0] == 0:
+            d0[1] = u
+        mbs.systemData.SetDataCoordinates(d0)
+        return True
+    mbs.SetPreStepUserFunction(prestep)
+    mbs.Assemble()
+    s = settings(t_end, n)
+    s.timeIntegration.absoluteTolerance = s.timeIntegration.relativeTolerance = 1e-6
+    return mbs, s, node
