@@ -352,7 +352,7 @@ def test_drop_in_outputs_of_a_step_in_one_call_equal_one_at_a_time_and_exudyns_o
     batched, mbs = _top_sensor_run(n, T, t0, **kw)
     st = mbs.sys["lgtBridgeStats"]
     assert st["success"] and st["n_steps"] < n / 2           # several output steps per bridge step
-    monkeypatch.setattr(solve._OutputRows, "at", lambda self, t, on_step: self.sim.advance_to(t, on_step))
+    monkeypatch.setattr(solve.OutputRows, "at", lambda self, t, on_step: self.sim.advance_to(t, on_step))
     single, _ = _top_sensor_run(n, T, t0, **kw)
     assert np.array_equal(batched[:, 0], single[:, 0]) and len(batched) == n + 1
     assert np.abs(batched[:, 1:] - single[:, 1:]).max() <= 1e-13 * np.abs(single[:, 1:]).max()
@@ -385,13 +385,13 @@ def test_fixed_step_outputs_are_the_states_the_steps_end_on(monkeypatch, method)
         SolveDynamic(mbs, s, method=method)
         return mbs.GetSensorStoredData(sens)
     once = run()
-    at = solve._OutputRows.at
+    at = solve.OutputRows.at
 
     def rewritten(self, target, on_step):
         out = at(self, target, on_step)
         self.written = False
         return out
-    monkeypatch.setattr(solve._OutputRows, "at", rewritten)
+    monkeypatch.setattr(solve.OutputRows, "at", rewritten)
     assert np.array_equal(once, run()) and len(once) == n + 1
     SC, mbs, node = em.heavy_top(em.EP)
     r = simulate(ExudynModel(mbs), (0, T), method=method, dt=T / n, t_eval=once[:, 0])
