@@ -38,6 +38,34 @@ def engine_error(sd, what, exc):
                       "fix it (run the script with Exudyn's own solver to see it in context).")
 
 
+def guarded_f(plain, sd):
+    """The model's f from the kernels' closure ``plain(q, V, t)``: its arguments made float64
+    C-contiguous and a float, Exudyn's exceptions turned into the ModelError of
+    :func:`engine_error`; ``f.loop_f`` the same for the compiled step loop, which passes its
+    arguments in that form already (its result a float64 vector: no check)."""
+    contiguous = np.ascontiguousarray
+
+    def f(q, V, t):
+        try:
+            return plain(contiguous(q, float), contiguous(V, float), float(t))
+        except Exception as exc:
+            err = engine_error(sd, "f", exc)
+            if err is None:
+                raise
+            raise err from exc
+
+    def loop_f(q, V, t):
+        try:
+            return plain(q, V, t)
+        except Exception as exc:
+            err = engine_error(sd, "f", exc)
+            if err is None:
+                raise
+            raise err from exc
+    f.loop_f, loop_f.returns_float64_vector = loop_f, True
+    return f
+
+
 @contextlib.contextmanager
 def engine_errors(sd, what):
     """Within: an exception Exudyn raises becomes the ModelError of :func:`engine_error`

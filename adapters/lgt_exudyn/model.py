@@ -18,7 +18,7 @@ from lgt_bridge.switches import REDO
 
 from . import constraints as _constraints
 from .constraints import ConstraintRows
-from .engine import Engine, engine_call, engine_error, engine_set_up
+from .engine import Engine, engine_call, engine_set_up, guarded_f
 from .layout import NodeLayout, constant_twist_mass
 from .hooks import StepHooks, has_prestep
 from .iteration import newton_matrix, residual_function
@@ -485,15 +485,5 @@ class ExudynModel(StepHooks, Model):
             if plain is not None and self.ode1 is None:
                 # constant M̄, unconstrained or closed-form joint rows: f is the kernels'
                 # closure from now on (the same calls as _f2's, nothing looked up per call)
-                contiguous, sd = np.ascontiguousarray, self.sd
-
-                def f(q, V, t):
-                    try:
-                        return plain(contiguous(q, float), contiguous(V, float), float(t))
-                    except Exception as exc:
-                        err = engine_error(sd, "f", exc)
-                        if err is None:
-                            raise
-                        raise err from exc
-                self.f = f
+                self.f = guarded_f(plain, self.sd)
         return self._P

@@ -16,9 +16,10 @@ tests/core/test_compiled_loop.py). It hands back to Python
 - a step size below what the run allows (the same StepFailed as the Python loop).
 
 An f whose adapter vouches for its result (attribute ``returns_float64_vector``: Pinocchio's
-ABA) is called without the check of what it returns, and one that says how to call the
-engine directly (``time_free_call = (g, arg)``: f(q, v, t) = g(q, v, arg) for every t) without
-its own Python frame.
+ABA) is called without the check of what it returns, one that says how to call the engine
+directly (``time_free_call = (g, arg)``: f(q, v, t) = g(q, v, arg) for every t) without its
+own Python frame, and one with a form for the loop's arguments (``loop_f``: float64
+C-contiguous q, v and a float t, as the loop passes them; Exudyn's) in that form.
 
 Used for a :class:`~.rkmk.AdaptiveRK` stepper on a
 :class:`~.compiled.CompiledProblem`, without projection, post-step hooks or mode switches
@@ -177,6 +178,7 @@ class Loop:
         self.runs += 1
         each = on_step is not None or sim.model.step_write_back
         kern, f, q, v = _DRIVE, prob._fs, prob._q, prob._vs
+        f = getattr(f, "loop_f", f)            # an f's form for float64 C-contiguous q, v and a float t
         w, I, L, C = prob.work, prob._I, self.L, self.C
         ndarray, F64 = _NDARRAY, _F64
         # an f whose result needs no check (its adapter says it returns a float64 vector)

@@ -474,3 +474,36 @@ def test_H_pinv_and_the_constant_mass_check_against_their_references(monkeypatch
     assert dense is not None and np.abs(dense - sparse).max() <= 1e-14 * np.abs(dense).max()
     H = nodes.H(m.q0[:m.n2])
     np.testing.assert_allclose(dense, H.T @ m.engine.mass_matrix() @ H, atol=1e-13)
+
+
+def test_compiled_step_loop_on_free_exudyn_bodies_takes_the_python_loops_steps():
+    """Free bodies (Euler parameters and rotation vectors, under gravity) through
+    ``simulate(ExudynModel(mbs))``: the compiled step loop, calling Exudyn's f in its loop form
+    (no argument conversions; ``f.loop_f``), takes the Python loop's steps, and the system
+    holds the run's end state afterwards (written where the loop stops, not per step)."""
+    import exudyn.utilities as eu
+    from lgt_bridge import Simulation
+
+    def build():
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        rng = np.random.default_rng(4)
+        for node in (exu.NodeType.RotationEulerParameters, exu.NodeType.RotationRotationVector) * 2:
+            mbs.CreateRigidBody(inertia=eu.InertiaCuboid(1000.0, rng.uniform(0.2, 1.0, 3)), nodeType=node,
+                                referencePosition=rng.normal(size=3), initialAngularVelocity=rng.normal(size=3) * 3,
+                                initialVelocity=rng.normal(size=3), gravity=[0, -9.81, 0])
+        mbs.Assemble()
+        return SC, mbs
+    out = []
+    for use in (True, False):
+        SC, mbs = build()
+        m = ExudynModel(mbs)
+        sim = Simulation(m, method="dop853", rtol=1e-11, atol=1e-11)
+        sim._use_loop = use
+        r = sim.run(2.0, t_eval=[0.5, 2.0])
+        out.append((r, sim, np.array(mbs.systemData.GetODE2Coordinates()), m))
+    (a, sa, xa, ma), (b, sb, xb, _) = out
+    assert getattr(ma.f, "loop_f", None) is not None and sa.stepper._compiled_loop.runs >= 1
+    assert a.stats["n_steps"] == b.stats["n_steps"] > 10 and a.stats["n_f"] == b.stats["n_f"]
+    np.testing.assert_allclose(a.q, b.q, rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(xa, xb, rtol=1e-12, atol=1e-13)
