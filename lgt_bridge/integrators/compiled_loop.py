@@ -15,11 +15,12 @@ tests/core/test_compiled_loop.py). It hands back to Python
   failure reports and retries, and the loop goes on (that attempt's f are evaluated twice);
 - a step size below what the run allows (the same StepFailed as the Python loop).
 
-An f whose adapter vouches for its result (attribute ``returns_float64_vector``: Pinocchio's
-ABA) is called without the check of what it returns, one that says how to call the engine
-directly (``time_free_call = (g, arg)``: f(q, v, t) = g(q, v, arg) for every t) without its
-own Python frame, and one with a form for the loop's arguments (``loop_f``: float64
-C-contiguous q, v and a float t, as the loop passes them; Exudyn's) in that form.
+Three attributes of an f let the loop call it more cheaply: ``loop_f``, a form of f for the
+loop's own arguments (float64 C-contiguous q, v and a float t: Exudyn's f without its
+conversions), which the loop calls instead; ``returns_float64_vector`` (its adapter vouches
+for the result: Pinocchio's ABA, Exudyn's kernels), which spares the check of what it returns;
+``time_free_call = (g, arg)`` with f(q, v, t) = g(q, v, arg) for every t (Pinocchio's free
+motion under constant torques: ``aba(model, data)``), which spares f's own Python frame.
 
 Used for a :class:`~.rkmk.AdaptiveRK` stepper on a
 :class:`~.compiled.CompiledProblem`, without projection, post-step hooks or mode switches
