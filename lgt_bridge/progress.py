@@ -125,4 +125,16 @@ def simulation_bar(progress, t0, t1, driver, stepper, desc="simulate"):
         return (driver.t - t0,
                 f"t={driver.t:.6g} s, steps={n}, f evals={stepper.prob.n_f}, h={h:.2e}, {rate}")
     bar = Progress(progress, t1 - t0, state, desc=desc, unit=" s")
+
+    def tick(t, q, V):
+        bar.step()
+    # an on_step hook for the bar alone: it redraws from the driver's state, so it may be
+    # called once per STRIDE steps (the compiled step loop then hands back only that often)
+    tick.stride = STRIDE
+    bar.hook = tick
     return bar
+
+
+#: steps per call of a simulation bar's ``hook`` at most (a divisor of the simulation's
+#: budget window, 1000 steps)
+STRIDE = 50

@@ -467,7 +467,7 @@ class Simulation:
         if tracker is not None:
             hook = tracker.hook(on_step)
         else:               # (None: nothing to do after a step, which lets the steps run on)
-            hook = on_step if (record_all or bar.mode is not None) else None
+            hook = on_step if record_all else (None if bar.mode is None else bar.hook)
         try:
             if not record_all:          # the outputs within a step in one dense call
                 i = 0

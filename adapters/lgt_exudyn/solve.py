@@ -209,7 +209,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             "minimumStepSize, or use method='genalpha'.")
     first_step = sim.first_step
     bar = simulation_bar(progress, t0, t1, sim, sim.stepper, desc="SolveDynamic")
-    on_step = None if bar.mode is None else (lambda t, q, V: bar.step())
+    on_step = None if bar.mode is None else bar.hook      # (may be called once per bar.hook.stride steps)
     tracker = None if events is None else _events.Tracker(sim, events)   # checks g before a step
     if tracker is not None:
         on_step = tracker.hook(on_step or (lambda t, q, V: None))

@@ -9,7 +9,8 @@ tests/core/test_compiled_loop.py). It hands back to Python
 
 - after an accepted step that reaches the stop time, or after every accepted step when
   something must run then (an ``on_step`` hook, the model's ``write_back``), and every
-  ``Simulation.BUDGET_WINDOW`` steps (the step-budget check);
+  ``Simulation.BUDGET_WINDOW`` steps (the step-budget check), or every ``stride`` steps of
+  a hook that may wait that long (a progress bar's);
 - an attempt the Python stepper does itself (the step budget spent, a stage beyond its
   chart's domain or not finite): :meth:`Simulation._step` then takes that step, with its
   failure reports and retries, and the loop goes on (that attempt's f are evaluated twice);
@@ -177,7 +178,9 @@ class Loop:
         if not sim.t < stop - tol:
             return
         self.runs += 1
-        each = on_step is not None or sim.model.step_write_back
+        # after every step, unless the hook may wait (a progress bar's: every ``stride`` steps)
+        stride = getattr(on_step, "stride", None)
+        each = (on_step is not None and stride is None) or sim.model.step_write_back
         kern, f, q, v = _DRIVE, prob._fs, prob._q, prob._vs
         f = getattr(f, "loop_f", f)            # an f's form for float64 C-contiguous q, v and a float t
         w, I, L, C = prob.work, prob._I, self.L, self.C
@@ -188,6 +191,8 @@ class Loop:
         g, arg = fast if fast is not None else (None, None)
         while True:
             self._load(sim, stop, each)
+            if stride is not None:
+                C[_s.BUDGET] = stride
             vd = _NONE
             try:
                 # one kernel call and one f per stage, nothing else (NaN: back to Python, C[CODE]

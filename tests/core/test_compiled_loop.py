@@ -160,3 +160,28 @@ def test_switching_loops_between_horizons_keeps_the_steps():
     for a, b in zip(horizons(mixed, True), horizons(ref, False)):
         _same(a, b)
     assert _loop_runs(mixed) >= 4
+
+
+def test_a_progress_bar_lets_the_loop_run_on_and_shows_the_run(capsys):
+    """With a progress bar (its hook may wait STRIDE steps) the loop hands back every STRIDE
+    steps, not after each (the other hooks: every step), and the run equals the Python loop's;
+    the bar is drawn."""
+    from lgt_bridge import progress
+    (a, sa), (b, _) = _pair(MODELS["heavy top"], lambda sim: sim.run(2.0, t_eval=[2.0], progress=True),
+                            method="dopri5", rtol=1e-10, atol=1e-10)
+    _same(a, b)
+    n = a.stats["n_steps"]
+    assert n > 3 * progress.STRIDE
+    calls = []
+    sim = Simulation(MODELS["heavy top"](), method="dopri5", rtol=1e-10, atol=1e-10, t_end=2.0)
+    bar = progress.simulation_bar(True, 0.0, 2.0, sim, sim.stepper)
+    calls_hook = bar.hook
+
+    def counting(t, q, V):
+        calls.append(t)
+        calls_hook(t, q, V)
+    counting.stride = progress.STRIDE
+    sim.advance_to(2.0, counting)
+    bar.close()
+    assert sim.n_steps == n and len(calls) <= n // progress.STRIDE + 1
+    assert "simulate" in capsys.readouterr().err
