@@ -7,6 +7,8 @@ steps collapse or its step budget runs out.
   ``BUDGET_WINDOW`` accepted steps: a stiff model at an explicit method's stability limit,
   a force that jumps at the state (sign(v) friction sticking) holding the error control,
   or a fast motion it must resolve;
+- :func:`jump_at_end` — a model whose f jumps in time at the run's end (a load switched on
+  at the end time), which every step landing there sees;
 - :func:`max_steps_message` — what reaching ``max_steps`` means.
 
 Each takes the simulation and reads its state (``model``, ``stepper``, ``t``, ``t_end``,
@@ -70,6 +72,30 @@ def singular_configuration(sim):
 #: motion, however fast, costs the PI controller a few rejections per hundred steps; the
 #: Coulomb oscillator sticking under sign(v) friction costs 1.4 per step)
 CHATTER_REJECTIONS = 0.5
+
+
+def jump_at_end(sim):
+    """Why the steps collapsed just before the end of the run, when the cause is f jumping
+    in time at the end time t_end at the same state (a load switched at t_end, as
+    ``np.heaviside(t - t_end, 1)``): each step landing on t_end has a stage there and its error
+    estimate sees the jump, at any step size. A sentence, or None (not near t_end, no jump,
+    or f failing there)."""
+    t1, t = sim.t_end, sim.t
+    if t1 is None or not 0.0 < t1 - t <= 1e-6 * max(1.0, abs(t1)):
+        return None
+    q, V = np.array(sim.q, float), np.array(sim.V, float)
+    try:
+        a = np.asarray(sim.model.f(q, V, t), float)
+        b = np.asarray(sim.model.f(q, V, t1), float)
+    except Exception:                     # (a diagnosis: the run's own error stands)
+        return None
+    d = float(np.abs(b - a).max()) if a.shape == b.shape else 0.0
+    if not d > 1e-6 * max(1.0, float(np.abs(a).max())):
+        return None
+    return (f"the model's accelerations jump by {d:.3g} between t = {t:.9g} and the end time {t1:.9g} at "
+            "the same state (a load switched on or off at the end time?): every step landing on the end "
+            "time sees the jump in its error estimate. End the run before the switch, move the switch "
+            "away from the end time, or loosen the tolerances.")
 
 
 def unaffordable(sim):

@@ -296,7 +296,7 @@ class Simulation:
             return StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
         return StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
                           f"{self.min_step_name} = {self.min_step:g}: "
-                          + (self._singular_configuration() or self.min_step_why))
+                          + (self._singular_configuration() or _diagnosis.jump_at_end(self) or self.min_step_why))
 
     #: a singular value of the constraint Jacobian below this fraction of the largest (and
     #: not already at the start) marks a singular configuration

@@ -123,3 +123,26 @@ def test_failed_steps_keep_every_earlier_step():
     assert not newton["success"] and newton["steps_kept"] == 6 and newton["t_last"] == pytest.approx(0.3)
     # the failing step was halved down to min_step before the run gave up
     assert "Newton" in newton["message"] and "halving the step" in newton["message"]
+
+
+@pytest.mark.parametrize("at_end", [True, False])
+def test_a_load_switched_at_the_end_time_is_named_when_the_steps_collapse(at_end):
+    """A force switched on exactly at the end time (``np.heaviside(t - t_end, 1)``): each step
+    landing on the end time has a stage there, so at a tight tolerance the steps collapse
+    below min_step just before the end; the message names the jump (f at the same state
+    before and at the end time). The same switch inside the run (t = 0.5003) also collapses
+    the steps at this tolerance, where it is: that message makes no claim about the end."""
+    from lgt_bridge import Simulation
+    t_switch = 1.0 if at_end else 0.5003
+    m = scenes.heavy_top(False)
+    f0 = m.f
+
+    def f(q, V, t):
+        out = np.array(f0(q, V, t), float)
+        if t >= t_switch:
+            out[0] += 1e5
+        return out
+    m.f = f
+    r = Simulation(m, method="dopri5", rtol=1e-10, atol=1e-10, min_step=1e-8).run(1.0, t_eval=[1.0])
+    assert not r.success and "below min_step" in r.message
+    assert ("jump by 1e+05" in r.message and "end time" in r.message) == at_end
