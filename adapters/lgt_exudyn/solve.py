@@ -16,6 +16,7 @@ import numpy as np
 from lgt_bridge import events as _events
 from lgt_bridge.errors import InputError, LGTError, ModelNote, StepError
 from lgt_bridge.integrators import registry
+from lgt_bridge.integrators.genalpha import Newmark
 from lgt_bridge.lgt import DEFAULT_GROUP
 from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
@@ -83,7 +84,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     method, group, chart, rho_inf, project
         As :func:`lgt_bridge.simulate` (``group``/``chart`` may be "auto"); ``rho_inf``
         None (default): the settings' ``generalizedAlpha.spectralRadius`` (Exudyn's
-        generalized-α has the same coefficients).
+        generalized-α has the same coefficients), or with ``generalizedAlpha.useNewmark``
+        Newmark's method with its ``newmarkBeta``, ``newmarkGamma``
+        (:class:`lgt_bridge.integrators.genalpha.Newmark`).
     rtol, atol : float, optional
         Override the settings' tolerances (a missing one comes from the settings, or, for
         dopri5/dop853 with automaticStepSize False, is the bridge's default rtol 1e-6 /
@@ -194,7 +197,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # in which it is found
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=None if (prestep or events is not None) else t1, project=project,
-                     rho_inf=float(ti.generalizedAlpha.spectralRadius if rho_inf is None else rho_inf),
+                     rho_inf=_rho_inf(ti.generalizedAlpha) if rho_inf is None else rho_inf,
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
@@ -404,6 +407,14 @@ def _restore_data_before(mbs, data):
         return uf(mbs_, t)
     mbs.SetPreStepUserFunction(prestep)
     return uf
+
+
+def _rho_inf(ga):
+    """genalpha's ``rho_inf`` from Exudyn's generalizedAlpha settings: the spectral radius, or
+    Newmark's (β, γ) with ``useNewmark``."""
+    if ga.useNewmark:
+        return Newmark(float(ga.newmarkBeta), float(ga.newmarkGamma))
+    return float(ga.spectralRadius)
 
 
 def _has_user_function(mbs, getter):

@@ -37,6 +37,7 @@ sparse LU above SPARSE_MIN unknowns, dense LU below (:func:`.genalpha_matrix.fac
 """
 import math
 from collections import namedtuple
+from typing import NamedTuple
 
 import numpy as np
 
@@ -54,7 +55,23 @@ from .newton_control import tolerances
 _Affine = namedtuple("_Affine", "h a0 W0 dX0 k s_v sp")
 
 
+class Newmark(NamedTuple):
+    """Newmark's method with (β, γ), given as ``rho_inf``: generalized-α with α_m = α_f = 0
+    (the Exudyn drop-in's ``generalizedAlpha.useNewmark``; β = 1/4, γ = 1/2: the trapezoidal
+    rule, no numerical damping)."""
+    beta: float = 0.25
+    gamma: float = 0.5
+
+
 def coefficients(rho_inf):
+    """(α_m, α_f, γ, β) of Chung and Hulbert's generalized-α for the spectral radius at
+    infinity ``rho_inf``, or of Newmark's method for a :class:`Newmark`."""
+    if isinstance(rho_inf, Newmark):
+        beta, gamma = float(rho_inf.beta), float(rho_inf.gamma)
+        if not (gamma >= 0.5 and 2.0 * beta >= gamma):
+            raise InputError(f"genalpha: Newmark(beta={beta}, gamma={gamma}) is not unconditionally stable "
+                             "(it needs 2 beta >= gamma >= 1/2; Exudyn's default: beta = 0.25, gamma = 0.5).")
+        return 0.0, 0.0, gamma, beta
     if not 0.0 <= rho_inf <= 1.0:
         raise InputError(f"genalpha: rho_inf = {rho_inf} must lie in [0, 1] (1: no numerical "
                          "damping, 0: asymptotic annihilation).")

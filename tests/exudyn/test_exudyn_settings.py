@@ -421,3 +421,31 @@ def test_genalpha_takes_the_settings_spectral_radius(rho):
         finals.append(np.array(mbs.systemData.GetODE2Coordinates()))
     assert np.abs(finals[1] - finals[0]).max() < 1e-8
     assert np.abs(finals[2] - finals[0]).max() > 1e-6
+
+
+def test_genalpha_takes_the_settings_newmark_method():
+    """generalizedAlpha.useNewmark (with newmarkBeta, newmarkGamma) is Newmark's method,
+    generalized-α with α_m = α_f = 0 (``genalpha.Newmark``): at Exudyn's 100 steps, Exudyn's
+    own Newmark result to the Newton tolerances, where the settings' spectral radius (the
+    setting ignored) is far off; an unstable (β, γ) is refused."""
+    from lgt_bridge.errors import InputError
+    finals = []
+    for run in ("exudyn", "bridge", "spectral radius"):
+        SC, mbs = point_mass()
+        s = em.settings(1.0, 100)
+        ga = s.timeIntegration.generalizedAlpha
+        ga.useNewmark = run != "spectral radius"
+        ga.newmarkBeta, ga.newmarkGamma = 0.3, 0.6
+        if run == "exudyn":
+            mbs.SolveDynamic(s)
+        else:
+            SolveDynamic(mbs, s, method="genalpha")
+        finals.append(np.array(mbs.systemData.GetODE2Coordinates()))
+    assert np.abs(finals[1] - finals[0]).max() < 1e-8
+    assert np.abs(finals[2] - finals[0]).max() > 1e-6
+    SC, mbs = point_mass()
+    s = em.settings(1.0, 100)
+    s.timeIntegration.generalizedAlpha.useNewmark = True
+    s.timeIntegration.generalizedAlpha.newmarkBeta = 0.1
+    with pytest.raises(InputError, match="Newmark"):
+        SolveDynamic(mbs, s, method="genalpha")
