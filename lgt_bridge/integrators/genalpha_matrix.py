@@ -378,18 +378,32 @@ def _block_inverse(J, L):
 
 def fd_matrix(ga, Wd1, lam, t1, h):
     """The Newton matrix of the generalized-α stepper ``ga`` by finite differences of its
-    residual in Ẇ; the λ columns (the residual is affine in λ) from A: P M⁻¹Aᵀ or P Aᵀ."""
+    residual in Ẇ; the λ columns (the residual is affine in λ) from A: P M⁻¹Aᵀ or P Aᵀ.
+
+    Two step sizes. The force rows and the velocity-level constraint rows: Ẇ_j moved by √eps
+    relative to max(|Ẇ_j|, 1/s_v), so V moves by √eps·max(1, the step's change of V)
+    (V = W₀ + s_v Ẇ): velocity-dependent forces are linear over small velocity changes only
+    (a regularised friction over 1e-2 m/s; a step scaled to move q by √eps moved a ball's
+    spin by 1e3 rad/s at h = 1e-4 and Newton bounced). The position-level constraint rows
+    g/(h²β): q moved by ~√eps (h²β·δẆ), or their differences are rounding noise."""
     prob, m = ga.prob, ga.prob.model
     n = len(Wd1)
     r0 = ga._residual(Wd1, lam, t1, h)
     J = np.zeros((n + ga.nc, n + ga.nc))
-    # q moves by h²β·e: scale e so that it moves by ~√eps, or the g/(h²β) rows are noise
-    scale = 1.5e-8 / min(1.0, h * h * ga.beta)
+    s_v = float(ga._affine(h).s_v)
+    pos = np.arange(n, n + ga.nc)
+    if ga._vel_rows is not None:
+        pos = np.setdiff1d(pos, n + np.asarray(ga._vel_rows, int))
+    big = 1.5e-8 / min(1.0, h * h * ga.beta)
     for j in range(n):
-        e = scale * max(1.0, abs(Wd1[j]))
+        e = 1.5e-8 * max(abs(Wd1[j]), 1.0 / s_v)
         Wp = Wd1.copy()
         Wp[j] += e
         J[:, j] = (ga._residual(Wp, lam, t1, h) - r0) / e
+        if len(pos):
+            e = big * max(1.0, abs(Wd1[j]))
+            Wp[j] = Wd1[j] + e
+            J[pos, j] = (ga._residual(Wp, lam, t1, h)[pos] - r0[pos]) / e
     if ga.nc:
         q1, quats = prob.configuration(ga._state(Wd1, h)[1])
         At = m.constraint_jacobian(q1).T
