@@ -274,12 +274,11 @@ def test_compiled_step_loop_takes_the_python_loops_steps(torques):
     model = humanoid()
     q0 = pin.neutral(model)
     v0 = np.linspace(-2.0, 2.0, model.nv)
-    tau = None
-    if torques == "pd":
-        def tau(t, q, v):
-            out = -2.0 * v
-            out[:6] = 0.0
-            return out
+    def damping(t, q, v):
+        out = -2.0 * v
+        out[:6] = 0.0
+        return out
+    tau = damping if torques == "pd" else None
     runs = []
     for use in (True, False):
         pm = PinocchioModel(model, q0=q0, v0=v0, tau=tau)
