@@ -8,16 +8,18 @@ model's V̇ of the pending stage and does everything up to the next stage's stat
 stage derivative, the next stage, or the step's end, its error norm, Hairer's stiffness
 test, the PI controller, the landing of the last stretch on the target, acceptance or
 rejection, the FSAL stage — and returns the next f's time (the state in the work array,
-as :func:`.stage.stage` leaves it). So a run is one kernel call and one
-f per stage (:mod:`lgt_bridge.integrators.compiled_loop`).
+as :func:`.stage.stage` leaves it). So a run is one kernel call and one f per stage
+(:mod:`lgt_bridge.integrators.compiled_loop`). :func:`drive` itself handles the common call
+(a stage that is not a step's last) and :func:`_advance` the rest.
 
-It returns NaN, back to Python with a code in ``C[CODE]``, ``ACCEPTED`` after an accepted step that reaches
-the stop time, or when asked after every accepted step (on-step hooks, engines' write-back),
-every ``BUDGET_WINDOW`` accepted steps; ``PY_STEP`` when the next attempt is one the
-Python stepper must do itself (the step budget is spent, a stage left its chart or is not
-finite, a non-finite end state): the attempt is abandoned, its start unchanged;
-``UNDERFLOW`` and ``MIN_STEP`` when the step size fell below what the run allows. The
-arithmetic is the Python stepper's, operation for operation (tests: equal runs).
+It returns NaN to hand back to Python, with a code in ``C[CODE]``: ``ACCEPTED`` after an
+accepted step that reaches the stop time, after every accepted step when asked (on-step
+hooks, engines' write-back), and every ``C[BUDGET]`` accepted steps (the budget window, or a
+progress bar's stride); ``PY_STEP`` when the next attempt is one the Python stepper must do
+itself (the step budget is spent, a stage left its chart or is not finite, a non-finite end
+state): the attempt is abandoned, its start unchanged; ``UNDERFLOW`` and ``MIN_STEP`` when
+the step size fell below what the run allows. The arithmetic is the Python stepper's,
+operation for operation (tests: equal runs).
 
 ``C`` holds the loop's state and settings at the slots named below.
 """
