@@ -11,10 +11,9 @@ The per-step cost is one increment and one comparison: the clock is read only ev
 ``stride`` steps, with the stride adapted so that checks happen about every
 ``CHECK_S`` seconds.
 """
+import os
 import sys
 import time
-
-from .backend import _env
 
 DELAY = 1.0          # s of wall time before a bar appears in the default mode
 CHECK_S = 0.1        # s between two looks at the clock
@@ -29,7 +28,7 @@ def mode(progress, stream=None):
             tty = stream.isatty()
         except (AttributeError, ValueError):
             return None
-        return "auto" if tty and not _env("CI") else None
+        return "auto" if tty and not os.environ.get("CI") else None
     return "on" if progress else None
 
 

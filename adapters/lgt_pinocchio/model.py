@@ -32,7 +32,7 @@ from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, ja
 from .iteration import iteration_parts
 from .memo import initial_state, lend_data, model_memo
 from .loads import Loads
-from .rhs import build_f, f_numpy
+from .rhs import compiled_f, f_numpy
 
 
 def _pin():
@@ -43,16 +43,7 @@ def _pin():
     return _PIN
 
 
-def _kernels():
-    """The compiled kernels (imported on first use: they import numba)."""
-    global _KERNELS
-    if _KERNELS is None:
-        from . import kernels
-        _KERNELS = kernels
-    return _KERNELS
-
-
-_PIN = _KERNELS = None
+_PIN = None
 
 
 #: smallest singular value of the constraint Jacobian A (twist coordinates), relative to its largest,
@@ -192,14 +183,7 @@ class PinocchioModel(Model):
         if self.n_constraints:
             self._rank_constraints()
         if self.compiled:
-            self._kernels = kernels = _kernels()
-            jt = self._memo.get("joint_table")           # (the joints' constant: made once per model)
-            if jt is None:
-                jt = self._memo["joint_table"] = kernels.joint_table(self.joints.roots, self.joints.planars,
-                                                                     self.joints.zyx)
-            self._jt = jt
-            self._kW, self._kv = kernels.work_array(self._jt, self.nv)
-            self.f, f_engine = build_f(self, kernels)
+            self.f, f_engine = compiled_f(self)
             self._f_compiled = self.f
             self.f.__doc__ = PinocchioModel.f.__doc__
             if f_engine is not None:

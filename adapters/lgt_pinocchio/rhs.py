@@ -45,6 +45,26 @@ def f_numpy(m, q, V, t):
     return m.joints.vdot_from_a(q, v, a)
 
 
+def compiled_f(m):
+    """(f, f_engine) of model ``m`` on the compiled backend (:func:`build_f`), after its set-up:
+    the kernels (imported on first use: they import numba) as ``m._kernels``, the joint table
+    ``m._jt`` (the joints' constant: made once per pinocchio.Model, kept in its memo) and the
+    kernels' work array ``m._kW`` with v's view ``m._kv``."""
+    global _KERNELS
+    if _KERNELS is None:
+        from . import kernels as _KERNELS
+    kernels = m._kernels = _KERNELS
+    jt = m._memo.get("joint_table")
+    if jt is None:
+        jt = m._memo["joint_table"] = kernels.joint_table(m.joints.roots, m.joints.planars, m.joints.zyx)
+    m._jt = jt
+    m._kW, m._kv = kernels.work_array(jt, m.nv)
+    return build_f(m, kernels)
+
+
+_KERNELS = None
+
+
 def build_f(m, kernels):
     """(f, f_engine) of model ``m`` on the compiled backend. f: V -> v by one kernel call into
     the work array, Pinocchio, then a -> V̇ in place by a second (ABA's a is a new array, so

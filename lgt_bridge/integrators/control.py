@@ -8,12 +8,7 @@ import numpy as np
 
 def rms(y):
     """Root mean square of a scaled vector (any shape; 0 for an empty one)."""
-    v = y.ravel()
-    return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
-
-
-def _rms1(v):
-    """rms of a 1-D vector."""
+    v = y if y.ndim == 1 else y.ravel()
     return math.sqrt(float(v.dot(v)) / v.size) if v.size else 0.0
 
 
@@ -28,7 +23,7 @@ def initial_step(rates, nX, W, t, rtol, atol, order, f0=None):
     y0[nX:] = W
     f0 = rates(np.zeros(nX), W, t) if f0 is None else f0
     sc = atol + rtol * np.abs(y0)
-    d0, d1 = _rms1(y0 / sc), _rms1(f0 / sc)
+    d0, d1 = rms(y0 / sc), rms(f0 / sc)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     hf = h0 * f0
     f1 = rates(hf[:nX], W + hf[nX:], t + h0)
@@ -36,7 +31,7 @@ def initial_step(rates, nX, W, t, rtol, atol, order, f0=None):
         return h0
     f1 -= f0
     f1 /= sc
-    d2 = _rms1(f1) / h0
+    d2 = rms(f1) / h0
     h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / order)
     return min(100 * h0, h1)
 
