@@ -227,14 +227,19 @@ LAGGED_OBJECTS = {"ConnectorRollingDiscPenalty": "its friction force acts along 
                                                  "last step's end (data coordinates 0, 1)"}
 
 
+def objects(mbs):
+    """(index, type without its "Object" prefix, dict) of each object of the system."""
+    for k in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(k)
+        yield k, str(o.get("objectType", "")).removeprefix("Object"), o
+
+
 def gap_rows(mbs):
     """Indices, among the system's data coordinates, of the contact gaps (the GAP_OBJECTS'
     data); the other data coordinates (tangential and impact velocities, plastic overlaps)
     are not switches when they change sign."""
     sd, rows = mbs.systemData, []
-    for k in range(sd.NumberOfObjects()):
-        o = mbs.GetObject(k)
-        kind = str(o.get("objectType", "")).removeprefix("Object")
+    for k, kind, o in objects(mbs):
         if kind in GAP_OBJECTS and "nodeNumber" in o:
             try:
                 rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[GAP_OBJECTS[kind]]))
@@ -245,9 +250,7 @@ def gap_rows(mbs):
 
 def note_lagged_objects(mbs):
     """A ModelNote naming each LAGGED_OBJECTS object of the system."""
-    for k in range(mbs.systemData.NumberOfObjects()):
-        o = mbs.GetObject(k)
-        kind = str(o.get("objectType", "")).removeprefix("Object")
+    for k, kind, o in objects(mbs):
         if kind in LAGGED_OBJECTS:
             warnings.warn(ModelNote(
                 f"Exudyn object {k} {o.get('name', '')!r} (Object{kind}): {LAGGED_OBJECTS[kind]}, so its "
@@ -264,17 +267,15 @@ def mode_rows(mbs):
     which misses a stop left after a shallow penetration: a step longer than Exudyn's would
     then keep pulling the mass back until its end."""
     sd, rows = mbs.systemData, []
-    for k in range(sd.NumberOfObjects()):
-        o = mbs.GetObject(k)
-        if str(o.get("objectType", "")).removeprefix("Object") != "ConnectorCoordinateSpringDamperExt" or \
-                int(o.get("nodeNumber", -1)) < 0:
+    for k, kind, o in objects(mbs):
+        if kind != "ConnectorCoordinateSpringDamperExt" or int(o.get("nodeNumber", -1)) < 0:
             continue
         try:
             base = int(sd.GetNodeLTGData(int(o["nodeNumber"]))[0])
         except Exception:
             continue
-        friction = [float(o.get(k, 0.0)) for k in ("dynamicFrictionForce", "staticFrictionOffsetForce",
-                                                   "fDynamicFriction", "fStaticFrictionOffset")]  # (old names)
+        friction = [float(o.get(name, 0.0)) for name in ("dynamicFrictionForce", "staticFrictionOffsetForce",
+                                                         "fDynamicFriction", "fStaticFrictionOffset")]  # (old names)
         bristle = float(o.get("frictionProportionalZone", 0.0)) == 0.0 and any(f != 0.0 for f in friction)
         rows += ([base] if bristle else []) + ([base + 2] if o.get("useLimitStops", False) else [])
     return np.array(rows, int)
@@ -287,10 +288,8 @@ def refuse_impact_models(mbs):
     the end of every step, so the force depends on where the steps end and the model has no
     limit an error-controlled method converges to (a Newton's cradle: dopri5 at 1e-8 and
     1e-10 differed by 3e-3 and stood 1.4e-2 from Exudyn's own refined solution)."""
-    for k in range(mbs.systemData.NumberOfObjects()):
-        o = mbs.GetObject(k)
-        if str(o.get("objectType", "")).removeprefix("Object") == "ContactSphereSphere" and \
-                int(o.get("impactModel", 0)) != 0:
+    for k, kind, o in objects(mbs):
+        if kind == "ContactSphereSphere" and int(o.get("impactModel", 0)) != 0:
             # Exudyn 1.13 reports an ObjectContactSphereTriangle as ContactSphereSphere
             kind = "ObjectContactSphereTriangle" if "trianglePoints" in o else "ObjectContactSphereSphere"
             raise InputError(
@@ -311,9 +310,8 @@ def refuse_sliding_joints(mbs):
     start-of-step value, the joint pinned to one point of the cable (Exudyn's
     ANCFslidingJoint2D.py: the step size fell to 1e-8 s in the first millisecond, and
     ANCFslidingAndALEjointTest.py ran past 90 s)."""
-    for k in range(mbs.systemData.NumberOfObjects()):
-        o = mbs.GetObject(k)
-        if str(o.get("objectType", "")).removeprefix("Object") == "JointSliding2D":
+    for k, kind, o in objects(mbs):
+        if kind == "JointSliding2D":
             raise InputError(
                 f"Exudyn object {k} {o.get('name', '')!r} (ObjectJointSliding2D): its algebraic "
                 "coordinates hold the sliding coordinate s along the cable next to its two Lagrange "
