@@ -8,7 +8,9 @@ steps collapse or its step budget runs out.
   a force that jumps at the state (sign(v) friction sticking) holding the error control,
   or a fast motion it must resolve;
 - :func:`jump_at_end` — a model whose f jumps in time at the run's end (a load switched on
-  at the end time), which every step landing there sees;
+  at the end time), which every step landing there sees (:func:`jump_size_at_end`: how far);
+- :func:`step_too_small` — the failure of a step below ``min_step``, with the cause one of
+  the above finds;
 - :func:`max_steps_message` — what reaching ``max_steps`` means.
 
 Each takes the simulation and reads its state (``model``, ``stepper``, ``t``, ``t_end``,
@@ -74,12 +76,10 @@ def singular_configuration(sim):
 CHATTER_REJECTIONS = 0.5
 
 
-def jump_at_end(sim):
-    """Why the steps collapsed just before the end of the run, when the cause is f jumping
-    in time at the end time t_end at the same state (a load switched at t_end, as
-    ``np.heaviside(t - t_end, 1)``): each step landing on t_end has a stage there and its error
-    estimate sees the jump, at any step size. A sentence, or None (not near t_end, no jump,
-    or f failing there)."""
+def jump_size_at_end(sim):
+    """How far f jumps in time at the end time t_end at the current state (max-abs over
+    its entries), when the run stands within the last millionth of it before t_end and the
+    jump exceeds 1e-6 of f; else None (not near t_end, no jump, or f failing there)."""
     t1, t = sim.t_end, sim.t
     if t1 is None or not 0.0 < t1 - t <= 1e-6 * max(1.0, abs(t1)):
         return None
@@ -90,12 +90,23 @@ def jump_at_end(sim):
     except Exception:                     # (a diagnosis: the run's own error stands)
         return None
     d = float(np.abs(b - a).max()) if a.shape == b.shape else 0.0
-    if not d > 1e-6 * max(1.0, float(np.abs(a).max())):
+    return d if d > 1e-6 * max(1.0, float(np.abs(a).max())) else None
+
+
+def jump_at_end(sim):
+    """Why the steps collapsed just before the end of the run, when the cause is f jumping
+    in time at the end time t_end at the same state (a load switched at t_end, as
+    ``np.heaviside(t - t_end, 1)``): each step landing on t_end has a stage there and its error
+    estimate sees the jump, at any step size. A sentence, or None (see
+    :func:`jump_size_at_end`). (A run normally steps around such a jump to its left limit,
+    :mod:`.end_jump`; this says why when even that step fails.)"""
+    d = jump_size_at_end(sim)
+    if d is None:
         return None
-    return (f"the model's accelerations jump by {d:.3g} between t = {t:.9g} and the end time {t1:.9g} at "
-            "the same state (a load switched on or off at the end time?): every step landing on the end "
-            "time sees the jump in its error estimate. End the run before the switch, move the switch "
-            "away from the end time, or loosen the tolerances.")
+    return (f"the model's accelerations jump by {d:.3g} between t = {sim.t:.9g} and the end time "
+            f"{sim.t_end:.9g} at the same state (a load switched on or off at the end time?): every step "
+            "landing on the end time sees the jump in its error estimate. End the run before the switch, "
+            "move the switch away from the end time, or loosen the tolerances.")
 
 
 def unaffordable(sim):
@@ -153,6 +164,17 @@ def unaffordable(sim):
     else:
         why = " Loosen the tolerances, or raise max_steps."
     return head + why
+
+
+def step_too_small(sim, underflow=False):
+    """The StepFailed of a step size below what the run allows (1e-14 t, min_step), with
+    its cause when one of the diagnoses above finds it, else the run's ``min_step_why``."""
+    from .integrators.base import StepFailed
+    if underflow:
+        return StepFailed(f"step size underflow at t = {sim.t:.9g} (h = {sim.h:.3g})")
+    return StepFailed(f"the step size fell to {sim.h:.3g} s at t = {sim.t:.9g}, below "
+                      f"{sim.min_step_name} = {sim.min_step:g}: "
+                      + (singular_configuration(sim) or jump_at_end(sim) or sim.min_step_why))
 
 
 def max_steps_message(sim):

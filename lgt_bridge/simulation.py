@@ -26,6 +26,7 @@ from . import auto as _auto
 from . import diagnosis as _diagnosis
 from . import events as _events
 from . import switches as _switches
+from .end_jump import finish_left_of_jump
 from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
 from .integrators import registry as _registry
@@ -167,7 +168,7 @@ class Simulation:
         span = (t_end - self.t) if t_end is not None else (dt or 1.0) * 1e2
         # switches of discontinuous states are located to h_event (finer at tighter tolerances)
         self.h_event = min(1e-7, getattr(self, "rtol", 0.0) or 1e-7) * max(span, 1e-300)
-        self.initial_projection = None
+        self.initial_projection = self.end_jump = None
         if consistent and model.n_constraints:
             own = getattr(model, "project_initial", None)     # an engine's own rule, if it has one
             q0, V0, self.initial_projection = (own or partial(project_initial, model))(q0, V0, self.t)
@@ -235,6 +236,8 @@ class Simulation:
             out["n_jacobians"] = st.n_jacobians
         if self.initial_projection is not None:
             out["initial_projection"] = self.initial_projection
+        if self.end_jump is not None:
+            out["end_jump"] = self.end_jump
         if getattr(self, "_switches", None) is not None:
             out["n_switches"] = len(self._switches.t_switches)
         if self.choice is not None:
@@ -245,7 +248,7 @@ class Simulation:
     def _step(self, target, on_step):
         st = self.stepper
         if self.n_steps >= self.max_steps:
-            raise StepFailed(self._max_steps_message())
+            raise StepFailed(_diagnosis.max_steps_message(self))
         h_before = self.h
         rem = target - self.t
         if st.adaptive and self.h < rem <= st.landing_steps * self.h:     # no sliver of a step
@@ -288,15 +291,16 @@ class Simulation:
                 raise self._too_small(underflow=True)
         if (self.h < self.min_step and self.h < h_before
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
+            self._collapsed(on_step)
+
+    def _collapsed(self, on_step):
+        """The step fell below min_step: the run ends at its left limit when f jumps at the
+        end time (:mod:`.end_jump`), else fails."""
+        if not finish_left_of_jump(self, on_step):
             raise self._too_small()
 
     def _too_small(self, underflow=False):
-        """The StepFailed of a step size below what the run allows (1e-14 t, min_step)."""
-        if underflow:
-            return StepFailed(f"step size underflow at t = {self.t:.9g} (h = {self.h:.3g})")
-        return StepFailed(f"the step size fell to {self.h:.3g} s at t = {self.t:.9g}, below "
-                          f"{self.min_step_name} = {self.min_step:g}: "
-                          + (self._singular_configuration() or _diagnosis.jump_at_end(self) or self.min_step_why))
+        return _diagnosis.step_too_small(self, underflow)
 
     #: a singular value of the constraint Jacobian below this fraction of the largest (and
     #: not already at the start) marks a singular configuration
@@ -318,17 +322,11 @@ class Simulation:
         while self.t < stop - tol:
             self._step(self.t_end, on_step)
 
-    def _singular_configuration(self):
-        return _diagnosis.singular_configuration(self)
-
     def _check_affordable(self):
         """Stop early a run that cannot finish within max_steps (:func:`.diagnosis.unaffordable`)."""
         why = _diagnosis.unaffordable(self)
         if why is not None:
             raise StepFailed(why)
-
-    def _max_steps_message(self):
-        return _diagnosis.max_steps_message(self)
 
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached, without collecting states.

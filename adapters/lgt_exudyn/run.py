@@ -32,6 +32,9 @@ def route_solve_dynamic(options):
             times = ", ".join(f"{t:.9g}" for t in te) if len(te) else "none"
             print(f"lgt-bridge: SolveDynamic #{len(calls)} event {i} ({name}): {len(te)} crossing(s) "
                   f"at t = {times}")
+        if st.get("end_jump") is not None:
+            print(f"lgt-bridge: SolveDynamic #{len(calls)}: the accelerations jump by {st['end_jump']:.3g} at "
+                  "endTime (a load switched there); the run ends at their left limit, the motion up to endTime")
         if "terminal event" in st["message"]:
             print(f"lgt-bridge: SolveDynamic #{len(calls)} ended at the {st['message']}")
         return ok

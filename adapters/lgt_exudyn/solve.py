@@ -365,6 +365,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         st.update(first_step=first_step, minimum_step=h_min, maximum_step=h_cap)
     if sim.initial_projection is not None:
         st["initial_projection"] = sim.initial_projection
+    if sim.end_jump is not None:     # f jumps at endTime: the run ended at the left limit
+        st["end_jump"] = sim.end_jump
     if model.redundant_rows:
         st["redundant_constraints"] = len(model.redundant_rows)
     if model.n_constraints or rebuilt[0]:

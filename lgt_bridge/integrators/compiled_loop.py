@@ -226,9 +226,11 @@ class Loop:
                 target = sim.t_end
                 if (sim.h < sim.min_step and sim.h < C[_s.HBEFORE]
                         and sim.t < target - 1e-12 * max(1.0, abs(target))):
-                    raise sim._too_small()
+                    sim._collapsed(on_step)
             elif code == _s.PY_STEP:
                 sim._step(sim.t_end, on_step)
+            elif code == _s.MIN_STEP:
+                sim._collapsed(on_step)
             else:
                 raise sim._too_small(underflow=code == _s.UNDERFLOW)
             if not sim.t < stop - tol:

@@ -125,15 +125,8 @@ def test_failed_steps_keep_every_earlier_step():
     assert "Newton" in newton["message"] and "halving the step" in newton["message"]
 
 
-@pytest.mark.parametrize("at_end", [True, False])
-def test_a_load_switched_at_the_end_time_is_named_when_the_steps_collapse(at_end):
-    """A force switched on exactly at the end time (``np.heaviside(t - t_end, 1)``): each step
-    landing on the end time has a stage there, so at a tight tolerance the steps collapse
-    below min_step just before the end; the message names the jump (f at the same state
-    before and at the end time). The same switch inside the run (t = 0.5003) also collapses
-    the steps at this tolerance, where it is: that message makes no claim about the end."""
-    from lgt_bridge import Simulation
-    t_switch = 1.0 if at_end else 0.5003
+def _switched_top(t_switch):
+    """The heavy top with a force switched on at t_switch (``np.heaviside(t - t_switch, 1)``)."""
     m = scenes.heavy_top(False)
     f0 = m.f
 
@@ -143,6 +136,39 @@ def test_a_load_switched_at_the_end_time_is_named_when_the_steps_collapse(at_end
             out[0] += 1e5
         return out
     m.f = f
-    r = Simulation(m, method="dopri5", rtol=1e-10, atol=1e-10, min_step=1e-8).run(1.0, t_eval=[1.0])
+    return m
+
+
+@pytest.mark.parametrize("loop", [True, False])
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_a_load_switched_at_the_end_time_ends_the_run_at_its_left_limit(method, loop, monkeypatch):
+    """A force switched on exactly at the end time: each step landing on the end time has a
+    stage there, so at a tight tolerance the steps collapse below min_step just before the
+    end. The motion up to the end time does not depend on f at that instant: the run takes
+    its last step to the double below the end time and ends there, at the state of the same
+    top without the switch (an independent run at a tighter tolerance), reporting the jump.
+    The compiled step loop and the Python one do the same. A run continued past the end time
+    starts on the far side of the jump, as a fresh run from that state does."""
+    from lgt_bridge import Simulation
+    monkeypatch.setattr(Simulation, "_use_loop", loop)
+    sim = Simulation(_switched_top(1.0), method=method, rtol=1e-10, atol=1e-10, min_step=1e-8)
+    r = sim.run(1.0, t_eval=[0.5, 1.0])
+    assert r.success, r.message
+    assert r.t[-1] == 1.0 and r.stats["end_jump"] == pytest.approx(1e5)
+    ref = Simulation(scenes.heavy_top(False), method="dop853", rtol=1e-12, atol=1e-12).run(1.0, t_eval=[1.0])
+    assert np.abs(r.q[-1] - ref.q[-1]).max() < 1e-8
+    assert np.abs(r.V[-1] - ref.V[-1]).max() < 1e-7
+    on = sim.run(1.001, t_eval=[1.001])
+    fresh = Simulation(_switched_top(1.0), method=method, rtol=1e-10, atol=1e-10, t0=1.0,
+                       q0=r.q[-1], V0=r.V[-1]).run(1.001, t_eval=[1.001])
+    assert on.success and np.abs(on.V[-1] - fresh.V[-1]).max() < 1e-6
+
+
+def test_a_load_switched_inside_the_run_still_collapses_the_steps_where_it_is():
+    """The same switch inside the run (t = 0.5003) collapses the steps at this tolerance where
+    it is: the run stops there, and its message makes no claim about the end time."""
+    from lgt_bridge import Simulation
+    sim = Simulation(_switched_top(0.5003), method="dopri5", rtol=1e-10, atol=1e-10, min_step=1e-8)
+    r = sim.run(1.0, t_eval=[1.0])
     assert not r.success and "below min_step" in r.message
-    assert ("jump by 1e+05" in r.message and "end time" in r.message) == at_end
+    assert "end time" not in r.message and 0.5002 < sim.t < 0.5003

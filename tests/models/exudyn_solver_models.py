@@ -5,7 +5,8 @@ users write them (Exudyn's own test models and examples are the pattern), each r
   2  ANCF cable and ANCF beam with damping (Exudyn's ANCFCableBeamDampingTest pattern)
   4  GeneralContact: spheres on a triangle floor
   3  the IFToMM double four-bar (Exudyn's fourBarMechanismIftomm.py pattern), a crank-rocker
-     four-bar away from singular configurations, a pendulum copied by pickling
+     four-bar away from singular configurations, a pendulum copied by pickling, a slider
+     and bar whose torque a user function switches on at endTime (pickleCopyMbs.py's)
   6  a load pulse much shorter than the run (automaticStepSize's maximum step)
   9  a long chain of rigid bodies on spherical joints (genalpha's Newton test)
   10 stiff models for an explicit method: a 1e7 N/m spring chain; Newton's cradle; Coulomb
@@ -285,6 +286,31 @@ def pickled_pendulum():
     mbs.sys["_SC"] = SC
     mbs.Assemble()
     return mbs, s
+
+
+def slider_torque_at_end(t_end=1.0, steps=1000, switched=True):
+    """Exudyn's pickleCopyMbs.py model: a block on a prismatic joint to ground carrying a bar
+    on a revolute joint (CreateRigidBody, CreatePrismaticJoint, CreateRevoluteJoint), both
+    moving at 1 m/s, the bar spinning at 4π rad/s; a torque user function on the bar,
+    ``np.heaviside(t - 1, 1)``, switches on at t = 1, the script's endTime (with
+    ``switched=False`` the same model without it)."""
+    from exudyn.utilities import InertiaCuboid
+    mbs = _system()
+    L, w = 0.5, 0.05
+    ground = mbs.CreateGround()
+    p0, s0 = np.array([0.5, 1, 0]), [0.5 * L, L, 0.2 * L]
+    b0 = mbs.CreateRigidBody(referencePosition=p0, initialVelocity=[0, 1, 0], inertia=InertiaCuboid(500, s0))
+    p1 = p0 + [0, 0.5 * L, 0.5 * s0[2] + w]
+    b1 = mbs.CreateRigidBody(referencePosition=p1, initialVelocity=[0, 1, 0], initialAngularVelocity=[0, 0, 4 * np.pi],
+                             inertia=InertiaCuboid(1000, [w, L, w]))
+    mbs.CreateRevoluteJoint(bodyNumbers=[b0, b1], position=p1 - [0, 0.5 * L, 0.5 * w], axis=[0, 0, 1])
+    mbs.CreatePrismaticJoint(bodyNumbers=[ground, b0], position=p0, axis=[0, 1, 0])
+
+    def torque(mbs, t, load):
+        return [0, 0, -np.heaviside(t - 1, 1) * 2 * np.cos(2 * np.pi * t) if switched else 0.0]
+    mbs.CreateTorque(bodyNumber=b1, loadVector=[0, 0, 0], loadVectorUserFunction=torque)
+    mbs.Assemble()
+    return mbs, settings(t_end, steps)
 
 
 # ---------------------------------------------------------------------------- item 9
