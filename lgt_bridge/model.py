@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import backend as _backend
 from . import params as _params
 from .errors import InputError
 
@@ -285,17 +286,46 @@ def solve_schur(S, r):
     M⁻¹Aᵀx, the constraint force, is the same for all of them)."""
     if len(r) == 0:
         return np.zeros(np.shape(r))
+    return schur_solver(S)(r)
+
+
+def schur_solver(S):
+    """r ↦ x of :func:`solve_schur` (r a vector or the columns of a matrix), S factorized
+    once: by the kernels' Cholesky (:mod:`.kernels.linalg`) on the compiled backend up to
+    ``_COMPILED_SCHUR_MAX`` rows (numpy's per-call overhead is most of a small solve), by
+    numpy's otherwise and on the numpy backend; by its eigen-decomposition when S is not
+    well conditioned."""
+    n = len(S)
+    if 0 < n <= _COMPILED_SCHUR_MAX and _backend.compiled():
+        global _KL
+        if _KL is None:
+            from .kernels import linalg as _KL
+        L = np.array(S, dtype=float, order="C").reshape(-1)
+        ok, dmin, dmax = _KL.cholesky(L, n, _NO_ENVELOPE)
+        if ok and dmin > np.sqrt(SCHUR_RCOND) * dmax:
+            def solve(r):
+                x = np.array(r, dtype=float, order="F")
+                for col in (x,) if x.ndim == 1 else x.T:       # (columns: contiguous in F order)
+                    _KL.cholesky_solve(L, n, _NO_ENVELOPE, col)
+                return x
+            return solve
     try:
         L = np.linalg.cholesky(S)
         d = np.diagonal(L)
         if d.min() > np.sqrt(SCHUR_RCOND) * d.max():
-            return np.linalg.solve(L.T, np.linalg.solve(L, r))
+            return lambda r: np.linalg.solve(L.T, np.linalg.solve(L, r))
     except np.linalg.LinAlgError:
         pass
     w, U = np.linalg.eigh(0.5 * (S + S.T))
     keep = w > SCHUR_RCOND * max(w.max(), 0.0)
-    Ur = U[:, keep]
-    return Ur @ ((Ur.T @ r) / (w[keep] if r.ndim == 1 else w[keep][:, None]))
+    Ur, wk = U[:, keep], w[keep]
+    return lambda r: Ur @ ((Ur.T @ r) / (wk if r.ndim == 1 else wk[:, None]))
+
+
+#: the compiled backend solves Schur complements up to this size with its own Cholesky
+_COMPILED_SCHUR_MAX = 64
+_NO_ENVELOPE = np.zeros(0, np.int64)
+_KL = None          # the kernels' linalg module, once imported
 
 
 def _solve_mass_dense(model, q, B):
@@ -311,8 +341,10 @@ def _constraint_schur_dense(model, q, rows=None):
     if rows is not None:
         A = A[rows]
     MiAt = model.solve_mass(q, A.T)
-    S = A @ MiAt
-    return A, lambda r: MiAt @ solve_schur(S, r)
+    if not len(A):
+        return A, lambda r: MiAt @ np.zeros(np.shape(r))
+    solve = schur_solver(A @ MiAt)
+    return A, lambda r: MiAt @ solve(r)
 
 
 Model.solve_mass = _solve_mass_dense

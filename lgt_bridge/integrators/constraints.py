@@ -33,6 +33,11 @@ class Projector:
     change by the residual over σ², σ the smallest singular value of A: 1e-12 left there
     moved f by 300x its size, at the rounding floor it stays put."""
 
+    #: an iteration that cut the residual below this fraction of it keeps its Jacobian and
+    #: factor for the next (simplified Gauss-Newton: the next residual is at the rounding
+    #: floor, or near it, either way); a slower one has the next take them afresh
+    REUSE_BELOW = 1e-3
+
     def __init__(self, model, tol=None, max_iter=12):
         self.model = model
         self.tol, self.max_iter = tol, max_iter
@@ -57,10 +62,13 @@ class Projector:
         g = self._g(q, t)
         before = gmax = float(np.abs(g).max()) if len(g) else 0.0
         tol = self.tol if self.tol is not None else _EPS4 * (1.0 + float(np.abs(q).max()))
+        correct = None
         for k in range(self.max_iter):
             if not len(g) or gmax <= tol:
                 break
-            d = self._schur(q)[1](g)
+            if correct is None:
+                correct = self._schur(q)[1]
+            d = correct(g)
             self.prob.start(q)
             q_new, _ = self.prob.configuration(self.prob.to_local(-d))
             g_new = self._g(q_new, t)
@@ -70,6 +78,8 @@ class Projector:
                 if g_new_max < gmax:                # at the rounding floor: keep the better one
                     q, g, gmax = q_new, g_new, g_new_max
                 break
+            if not g_new_max < self.REUSE_BELOW * gmax:
+                correct = None      # a slow contraction: the next iteration at a fresh Jacobian
             q, g, gmax = q_new, g_new, g_new_max
         return q, before, gmax
 

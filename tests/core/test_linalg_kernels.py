@@ -132,3 +132,31 @@ def test_band_lu_solves_like_superlu(n):
         _band_solver(S, {})
     D = sparse.csc_matrix(rng.normal(size=(n, n)))
     assert _band_solver(D, {}) is None
+
+
+@pytest.mark.parametrize("redundant", [False, True])
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_schur_solver_on_both_backends_solves_the_schur_complement(backend, redundant, rng, monkeypatch):
+    """lgt_bridge.model.schur_solver on S = A M⁻¹ Aᵀ (the compiled backend's own Cholesky up
+    to 64 rows, numpy's otherwise): for independent rows S x = r to rounding, a vector and
+    the columns of a matrix alike; for a redundant row (S singular, r consistent) the
+    minimum-norm solution, whose constraint force M⁻¹Aᵀx is the one of the independent rows."""
+    from lgt_bridge.model import schur_solver
+    monkeypatch.setenv("LGT_BRIDGE_BACKEND", backend)
+    A = rng.normal(size=(4, 9))
+    if redundant:
+        A = np.vstack([A, A[0] + 2.0 * A[2]])
+    M = spd(rng, 9)
+    MiAt = np.linalg.solve(M, A.T)
+    S = A @ MiAt
+    Y = rng.normal(size=(len(A), 2))
+    R = S @ Y                               # consistent; every solution x has M⁻¹Aᵀx = M⁻¹AᵀY
+    solve = schur_solver(S)
+    for r, y in ((R[:, 0], Y[:, 0]), (R, Y)):
+        x = solve(r)
+        assert x.shape == r.shape
+        assert np.abs(S @ x - r).max() < 1e-10 * np.abs(r).max()
+        want = MiAt @ y
+        assert np.abs(MiAt @ x - want).max() < 1e-9 * np.abs(want).max()
+        if redundant:                       # the minimum-norm one
+            assert np.linalg.norm(x) <= np.linalg.norm(np.linalg.lstsq(S, r, rcond=None)[0]) * (1 + 1e-9)
