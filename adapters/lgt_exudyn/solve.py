@@ -201,6 +201,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
+    # Exudyn's own run takes numberOfSteps steps: an explicit method held at its stability
+    # limit that needs far more stops early, saying so (lgt_bridge.diagnosis.unaffordable)
+    sim.run_end = t1
+    sim.reference_steps = (n, t0, t1, f"Exudyn's own solver (numberOfSteps = {n})")
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -359,6 +363,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               message=failure[0] if failure else stopped[0] if stopped else "reached endTime")
     if stepper.n_jacobians:
         st["n_jacobians"] = stepper.n_jacobians
+    if getattr(stepper, "stiff", None) is not None:
+        # the run was affordable, but the steps sat at the explicit method's stability limit
+        st["stiff"] = sim.stats()["stiff"]
     if tracker is not None:
         st["t_events"], st["q_events"], st["V_events"] = tracker.close()
     if controlled:
