@@ -133,6 +133,14 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
 
     Notes
     -----
+    An explicit method held at its stability limit (a stiff spring or contact, an ANCF cable)
+    whose rest of the run would need more than 20 times the steps of Exudyn's own solver
+    (numberOfSteps, for that stretch) and more than 10 s at the pace so far stops within its
+    first budget windows (about 2000 steps, fewer when steps are slow) with StepError, naming
+    the step that limit allows and the stiffest mode; use method='radau5' or 'genalpha' there.
+    A stiff run the caller can afford runs on, the statistics' ``stiff`` saying where its steps
+    sat (lgt_bridge.diagnosis.unaffordable).
+
     Pre-step user functions (``mbs.SetPreStepUserFunction``) may change the model between
     Exudyn's steps: connectors switched on or off are classified again and the stepper rebuilt
     (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step as a time
