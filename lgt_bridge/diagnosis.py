@@ -3,10 +3,12 @@ steps collapse or its step budget runs out.
 
 - :func:`singular_configuration` — a mechanism at a singular configuration (its constraint
   Jacobian loses rank), where an explicit method's steps collapse;
-- :func:`unaffordable` — a run that cannot finish within ``max_steps``, checked every
-  ``BUDGET_WINDOW`` accepted steps: a stiff model at an explicit method's stability limit,
-  a force that jumps at the state (sign(v) friction sticking) holding the error control,
-  or a fast motion it must resolve;
+- :func:`unaffordable` — a run that cannot afford to finish (beyond ``max_steps``, or, with
+  the steps the caller's own engine takes for it, an explicit method at its stability limit
+  needing far more), checked at the simulation's budget ticks: a stiff model at an explicit
+  method's stability limit (:func:`stability_limit`, from Hairer's test or the model's
+  Jacobian), a force that jumps at the state (sign(v) friction sticking) holding the error
+  control, or a fast motion it must resolve;
 - :func:`jump_at_end` — a model whose f jumps in time at the run's end (a load switched on
   at the end time), which every step landing there sees (:func:`jump_size_at_end`: how far);
 - :func:`step_too_small` — the failure of a step below ``min_step``, with the cause one of
@@ -15,7 +17,8 @@ steps collapse or its step budget runs out.
 
 Each takes the simulation and reads its state (``model``, ``stepper``, ``t``, ``t_end``,
 ``n_steps``, ``max_steps``, ``method``); none changes it, except the budget marks
-:func:`unaffordable` keeps between its calls.
+:func:`unaffordable` keeps between its calls (and :func:`stability_limit`'s evaluations of f
+next to the state, which count in ``n_f``; the model is written back at the state after them).
 """
 import numpy as np
 
@@ -109,46 +112,113 @@ def jump_at_end(sim):
             "move the switch away from the end time, or loosen the tolerances.")
 
 
+#: an explicit method's steps at or above this share of the step its stability region allows
+#: for the model's dominant eigenvalues (:func:`.integrators.stability.jacobian_limit`) are held
+#: by stability (steps the accuracy holds sit far below it: 0.08 of it on a geometrically exact
+#: beam at rtol 1e-8; steps at the limit at 0.6 to 1)
+AT_LIMIT = 0.4
+#: steps beyond this multiple of that step are not held by the modes the Jacobian shows (a
+#: contact that just closed, felt by the differences, not yet by the steps): Hairer's test speaks
+ABOVE_LIMIT = 1.5
+#: a run whose caller's own engine takes a known number of steps for it (``reference_steps``:
+#: Exudyn's numberOfSteps through the drop-in) is stopped when an explicit method is held at its
+#: stability limit and the rest of the run needs more than STIFF_RATIO times the engine's steps
+#: for the same stretch (an implicit step costs a few f, an explicit one 6 to 12: the explicit run
+#: then costs several times the implicit one) ...
+STIFF_RATIO = 20
+#: ... and would take more than STIFF_WALL seconds at the pace of the last window (a short run
+#: at the stability limit just runs)
+STIFF_WALL = 10.0
+
+
+def budget_tick(sim):
+    """Every ``sim._budget_unit`` accepted steps: the next unit, the largest of BUDGET_UNITS
+    whose steps take up to BUDGET_WALL s at the pace of the last one, and the budget check
+    (:func:`unaffordable`, raising StepFailed) when the run's end is known."""
+    now = _clock()
+    n0, w0 = sim._budget_clock
+    if sim.n_steps > n0:
+        per = (now - w0) / (sim.n_steps - n0)
+        units = sim.BUDGET_UNITS
+        sim._budget_unit = next((u for u in reversed(units) if u * per <= sim.BUDGET_WALL), units[0])
+    sim._budget_clock = (sim.n_steps, now)
+    if sim.t_end is not None or sim.run_end is not None:
+        why = unaffordable(sim)
+        if why is not None:
+            from .integrators.base import StepFailed
+            raise StepFailed(why)
+
+
 def unaffordable(sim):
-    """Why a run cannot finish within max_steps, or None: checked every BUDGET_WINDOW
-    accepted steps, from the mean step of the last window, once it has been steady (within
-    a factor 2 of the window before: no transient that may pass) and the rest of the run at
-    that step needs more than 4x the steps max_steps leaves. An explicit method that
-    Hairer's stiffness test finds at its stability limit (the stepper's ``stiff``) says so,
-    with the step that limit allows. A window in which the error control rejected at least
-    CHATTER_REJECTIONS attempts per accepted step is a force jumping at the state (sign(v)
-    friction sticking at v = 0, a switching user function): the step does not grow again
-    while the state sits on the jump, so the run stops once it needs more steps than
-    max_steps leaves (no 4x margin), saying so."""
-    window = sim.BUDGET_WINDOW
+    """Why a run cannot afford to finish, or None. Called at each of the simulation's budget
+    checks (every ``_budget_unit`` accepted steps: up to BUDGET_WINDOW, fewer when steps are
+    slow), it judges the mean step of the last window once it has been steady (within a
+    factor 2 of the window before: no transient that may pass):
+
+    - the rest at that step needs more than 4x the steps max_steps leaves: an explicit method
+      held at its stability limit says so, with the step that limit allows; a window in which
+      the error control rejected at least CHATTER_REJECTIONS attempts per accepted step is a
+      force jumping at the state (sign(v) friction sticking at v = 0, a switching user
+      function): the step does not grow again while the state sits on the jump, so the run
+      stops once it needs more steps than max_steps leaves (no 4x margin), saying so;
+    - with ``reference_steps`` (the steps the caller's own engine takes for the run, as
+      Exudyn's numberOfSteps): an explicit method held at its stability limit whose rest
+      needs more than STIFF_RATIO times the engine's steps for it and more than STIFF_WALL
+      seconds at the pace so far.
+
+    Held at the stability limit: Hairer's stiffness test (the stepper's ``stiff``) or the
+    model's own Jacobian (:func:`stability_limit`)."""
+    now = _clock()
     rej = sim.stepper.n_rejected
-    t_prev, t_last, rej_last = getattr(sim, "_budget_marks", (None, sim._t_start, 0))
-    sim._budget_marks = (t_last, sim.t, rej)
-    if t_prev is None:
+    marks = list(getattr(sim, "_budget_marks", None) or [])
+    if len(marks) >= 2 and marks[-1][0] - marks[-2][0] < 0.5 * (sim.n_steps - marks[-1][0]):
+        del marks[-1]       # a window much shorter than the next (the unit grew): one window
+    marks = (marks + [(sim.n_steps, sim.t, rej, now)])[-3:]
+    sim._budget_marks = marks
+    end = sim.t_end if sim.t_end is not None else getattr(sim, "run_end", None)
+    if len(marks) < 3 or end is None or not sim.t < end:
         return None
-    h_now = (sim.t - t_last) / window
-    h_before = (t_last - t_prev) / window
+    (n0, t0, _, _), (n1, t1, rej1, w1) = marks[0], marks[1]
+    window = sim.n_steps - n1
+    h_now = (sim.t - t1) / max(window, 1)
+    h_before = (t1 - t0) / max(n1 - n0, 1)
     if not (h_now > 0.0 and 0.5 * h_before <= h_now <= 2.0 * h_before):
         return None
-    need = int(np.ceil((sim.t_end - sim.t) / h_now))
+    need = int(np.ceil((end - sim.t) / h_now))
     left = sim.max_steps - sim.n_steps
-    stiff = getattr(sim.stepper, "stiff", None)
-    chatter = (rej - rej_last) / window
-    jumps = stiff is None and chatter >= CHATTER_REJECTIONS and not registry_implicit(sim.method)
-    if need <= (1 if jumps else 4) * left:
+    explicit = not registry_implicit(sim.method)
+    hairer = getattr(sim.stepper, "stiff", None)
+    chatter = (rej - rej1) / max(window, 1)
+    jumps = hairer is None and chatter >= CHATTER_REJECTIONS and explicit
+    ref = getattr(sim, "reference_steps", None)
+    wall_rest = need * (now - w1) / max(window, 1)
+    over_max = need > (1 if jumps else 4) * left
+    ref_rest = None
+    if ref is not None and not over_max:
+        n_ref, r0, r1 = ref[:3]
+        ref_rest = max(1.0, n_ref * (end - sim.t) / (r1 - r0))
+        if not (need > STIFF_RATIO * ref_rest and wall_rest > STIFF_WALL):
+            return None
+    elif not over_max:
         return None
     if singular_configuration(sim) is not None:
         return None     # short steps from a singular configuration: the min_step check says so
-    head = (f"{sim.method} cannot finish this run within max_steps = {sim.max_steps}: over the last "
-            f"{2 * window} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
-            f"the run, from t = {sim.t:.9g} to {sim.t_end:.9g}, would need about {need:d} more steps "
-            f"({left:d} left).")
-    if stiff is not None:
-        _, h_stab, rho = stiff
-        why = (f" Its steps sit at its stability limit, h ≈ {h_stab:.3g} s (the stiffest mode's rate "
-               f"ρ ≈ {rho:.3g} 1/s), whatever the tolerances: the model is stiff for an explicit method. "
-               "Use method='radau5' or method='genalpha' (implicit: their steps follow the accuracy, not "
-               "the stiffest mode).")
+    limit = stability_limit(sim, h_now) if (explicit and not jumps) else None
+    if ref_rest is not None and limit is None:
+        return None     # held by accuracy: the run is the caller's to afford (max_steps)
+    if ref_rest is not None:
+        name = ref[3] if len(ref) > 3 else "the engine's own steps"
+        head = (f"{sim.method} stopped at t = {sim.t:.9g}: the rest of the run, to {end:.9g}, would need about "
+                f"{need:d} more steps (its step has been steady at h ≈ {h_now:.3g} s over the last "
+                f"{sim.n_steps - n0} steps), {need / ref_rest:.0f} times the {ref_rest:.0f} steps of {name} "
+                f"for it, and about {_duration(wall_rest)} at the pace so far.")
+    else:
+        head = (f"{sim.method} cannot finish this run within max_steps = {sim.max_steps}: over the last "
+                f"{sim.n_steps - n0} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
+                f"the run, from t = {sim.t:.9g} to {end:.9g}, would need about {need:d} more steps "
+                f"({left:d} left).")
+    if limit is not None:
+        why = " " + limit
     elif jumps:
         why = (f" Its error control rejected {chatter:.2g} attempts per accepted step there: the model's "
                "forces jump at the state it sits on (sign(v) friction sticking at v = 0, a user function "
@@ -156,7 +226,7 @@ def unaffordable(sim):
                "(friction F·tanh(v/v_ε), or a proportional zone of the friction element), which makes the "
                "model stiff: then use method='radau5' or method='genalpha'; or run fixed steps (which "
                "chatter across the jump, first-order accurate there).")
-    elif not registry_implicit(sim.method):
+    elif explicit:
         why = (" The error control holds the step there: a fast motion (a stiff spring or contact, a "
                "flexible body such as an ANCF cable, sign(v) friction) it must resolve. Use method='radau5' "
                "or method='genalpha' when that motion need not be resolved, loosen the tolerances, or raise "
@@ -175,6 +245,48 @@ def step_too_small(sim, underflow=False):
     return StepFailed(f"the step size fell to {sim.h:.3g} s at t = {sim.t:.9g}, below "
                       f"{sim.min_step_name} = {sim.min_step:g}: "
                       + (singular_configuration(sim) or jump_at_end(sim) or sim.min_step_why))
+
+
+def stability_limit(sim, h):
+    """The sentence saying that an explicit method's steps (h) sit at its stability limit,
+    with the step that limit allows and the stiffest mode, or None when they do not: from
+    the model's Jacobian at the current state (the dominant eigenvalues, the stability
+    region along their rays: :func:`.integrators.stability.jacobian_limit`) when the steps
+    are between AT_LIMIT and ABOVE_LIMIT of what it allows, else from Hairer's test (the
+    stepper's ``stiff``). The model is written back at the stepper's state afterwards (the
+    differences moved it)."""
+    st = sim.stepper
+    from .integrators.stability import jacobian_limit
+    try:
+        got = jacobian_limit(st, sim.t) if hasattr(st, "tab") else None
+    finally:
+        sim.model.write_back(st.q, st.V, sim.t)
+    hairer = getattr(st, "stiff", None)
+    if got is not None and AT_LIMIT * got[0] <= h <= ABOVE_LIMIT * got[0]:
+        h_stab, lam = got
+        w = abs(lam.imag)
+        w, zeta = abs(lam.imag), max(0.0, -lam.real / abs(lam))
+        mode = (f"the stiffest mode's rate |λ| ≈ {abs(lam):.3g} 1/s: the model's Jacobian has its largest "
+                + (f"eigenvalues at λ ≈ {lam.real:.3g} ± {w:.3g}i 1/s, an oscillation of {w / (2 * np.pi):.3g} Hz "
+                   f"with damping ratio {zeta:.2g}" if w > 1e-3 * abs(lam) else f"eigenvalue at λ ≈ {lam.real:.3g} 1/s")
+                + f", where {sim.method} is stable for h|λ| ≤ {h_stab * abs(lam):.2f}")
+    elif hairer is not None:
+        h_stab, rho = hairer[1], hairer[2]
+        mode = f"the stiffest mode's rate ρ ≈ {rho:.3g} 1/s, as Hairer's stiffness test measures it on the steps"
+    else:
+        return None
+    return (f"Its steps sit at its stability limit, h ≈ {h_stab:.3g} s ({mode}), whatever the tolerances: "
+            "the model is stiff for an explicit method. Use method='radau5' or method='genalpha' (implicit: "
+            "their steps follow the accuracy, not the stiffest mode).")
+
+
+def _duration(s):
+    return f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def _clock():
+    import time
+    return time.perf_counter()
 
 
 def max_steps_message(sim):

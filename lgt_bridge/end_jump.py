@@ -9,14 +9,21 @@ step to the double just below t_end, where every stage is on the near side of th
 and ends at t_end with that state: the left limit, which is what a run of the model up to
 t_end means. The state moves by |V| times one rounding unit of t over that last gap.
 
-:func:`finish_left_of_jump` is called when the steps collapse below ``min_step`` within
+:func:`finish_left_of_jump` is called (by :func:`collapsed`) when the steps collapse below ``min_step`` within
 the last millionth of the run (:func:`.diagnosis.jump_at_end` says whether f jumps there);
 ``Simulation.end_jump`` then holds the size of the jump it stepped around, and the
 result's ``stats["end_jump"]`` reports it.
 """
 import numpy as np
 
-from .diagnosis import jump_size_at_end
+from .diagnosis import jump_size_at_end, step_too_small
+
+
+def collapsed(sim, on_step):
+    """The run's step fell below ``min_step``: it ends at its left limit when f jumps at the
+    end time (:func:`finish_left_of_jump`), else fails (:func:`.diagnosis.step_too_small`)."""
+    if not finish_left_of_jump(sim, on_step):
+        raise step_too_small(sim)
 
 
 def finish_left_of_jump(sim, on_step):

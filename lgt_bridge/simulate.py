@@ -48,7 +48,11 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
         (:mod:`lgt_bridge.progress`).
     max_steps : int, default 1_000_000
         The most accepted steps the run may take; reaching it ends the run with
-        ``success=False`` and a message saying so, keeping the steps computed.
+        ``success=False`` and a message saying so, keeping the steps computed. An adaptive
+        run whose steps have been steady for two budget windows (1000 steps each, fewer when
+        steps are slow) and whose rest needs more than 4x the steps left ends there, saying
+        why (for an explicit method at its stability limit: that step, from the model's
+        Jacobian or Hairer's test, and the advice radau5/genalpha).
     project : bool, default True
         Constrained models with explicit methods are projected onto g = 0 and A V = b after
         every step, and an initial state that violates the constraints is projected before the

@@ -26,7 +26,7 @@ from . import auto as _auto
 from . import diagnosis as _diagnosis
 from . import events as _events
 from . import switches as _switches
-from .end_jump import finish_left_of_jump
+from .end_jump import collapsed
 from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
 from .integrators import registry as _registry
@@ -165,6 +165,10 @@ class Simulation:
         self.dense = stepper.dense_capable and t_end is not None
         self.n_steps = 0
         self.n_redone = 0
+        # the budget check (diagnosis.budget_tick); the run's end when t_end is None, and the
+        # steps the caller's own engine takes for the run, (n, t0, t1, name) (drop-ins)
+        self._budget_unit, self._budget_clock = self.BUDGET_UNITS[0], (0, time.perf_counter())
+        self.run_end = self.reference_steps = None
         span = (t_end - self.t) if t_end is not None else (dt or 1.0) * 1e2
         # switches of discontinuous states are located to h_event (finer at tighter tolerances)
         self.h_event = min(1e-7, getattr(self, "rtol", 0.0) or 1e-7) * max(span, 1e-300)
@@ -234,6 +238,9 @@ class Simulation:
                        projection_iterations=p.iterations)
         if st.n_jacobians:
             out["n_jacobians"] = st.n_jacobians
+        stiff = getattr(st, "stiff", None)
+        if stiff is not None:       # an explicit method's steps at its stability limit (Hairer's test)
+            out["stiff"] = dict(t=float(stiff[0]), h_stable=float(stiff[1]), rho=float(stiff[2]))
         if self.initial_projection is not None:
             out["initial_projection"] = self.initial_projection
         if self.end_jump is not None:
@@ -283,21 +290,15 @@ class Simulation:
                 self.h = min(h_new, self.dt) if h_new is not None else self.dt
             if on_step is not None:
                 on_step(self.t, st.q, st.V)
-            if st.adaptive and self.t_end is not None and self.n_steps % self.BUDGET_WINDOW == 0:
-                self._check_affordable()
+            if st.adaptive and self.n_steps % self._budget_unit == 0:
+                _diagnosis.budget_tick(self)
         else:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):
                 raise self._too_small(underflow=True)
         if (self.h < self.min_step and self.h < h_before
                 and self.t < target - 1e-12 * max(1.0, abs(target))):
-            self._collapsed(on_step)
-
-    def _collapsed(self, on_step):
-        """The step fell below min_step: the run ends at its left limit when f jumps at the
-        end time (:mod:`.end_jump`), else fails."""
-        if not finish_left_of_jump(self, on_step):
-            raise self._too_small()
+            collapsed(self, on_step)
 
     def _too_small(self, underflow=False):
         return _diagnosis.step_too_small(self, underflow)
@@ -305,8 +306,10 @@ class Simulation:
     #: a singular value of the constraint Jacobian below this fraction of the largest (and
     #: not already at the start) marks a singular configuration
     SINGULAR_RATIO = 1e-3
-    #: the run's step budget is checked every BUDGET_WINDOW accepted steps
-    BUDGET_WINDOW = 1000
+    #: the step budget is checked every BUDGET_WINDOW accepted steps, or every BUDGET_UNITS
+    #: steps (divisors of it, multiples of the progress bar's stride) that take up to
+    #: BUDGET_WALL s at the pace so far, when fewer (an expensive f: a verdict within seconds)
+    BUDGET_WINDOW, BUDGET_UNITS, BUDGET_WALL = 1000, (50, 100, 200, 500, 1000), 2.0
 
     def _steps_until(self, stop, on_step):
         """Steps toward t_end until t reaches ``stop`` (to 1e-12 relative): the embedded
@@ -322,11 +325,6 @@ class Simulation:
         while self.t < stop - tol:
             self._step(self.t_end, on_step)
 
-    def _check_affordable(self):
-        """Stop early a run that cannot finish within max_steps (:func:`.diagnosis.unaffordable`)."""
-        why = _diagnosis.unaffordable(self)
-        if why is not None:
-            raise StepFailed(why)
 
     def advance_to(self, target, on_step=None):
         """Step until ``target`` is reached, without collecting states.

@@ -133,6 +133,14 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
 
     Notes
     -----
+    An explicit method held at its stability limit (a stiff spring or contact, an ANCF cable)
+    whose rest of the run would need more than 20 times the steps of Exudyn's own solver
+    (numberOfSteps, for that stretch) and more than 10 s at the pace so far stops within its
+    first budget windows (about 2000 steps, fewer when steps are slow) with StepError, naming
+    the step that limit allows and the stiffest mode; use method='radau5' or 'genalpha' there.
+    A stiff run the caller can afford runs on, the statistics' ``stiff`` saying where its steps
+    sat (lgt_bridge.diagnosis.unaffordable).
+
     Pre-step user functions (``mbs.SetPreStepUserFunction``) may change the model between
     Exudyn's steps: connectors switched on or off are classified again and the stepper rebuilt
     (``constraint_rows_rebuilt``); a constraint offset moved is spread over the step as a time
@@ -201,6 +209,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
+    # Exudyn's own run takes numberOfSteps steps: an explicit method held at its stability
+    # limit that needs far more stops early, saying so (lgt_bridge.diagnosis.unaffordable)
+    sim.run_end = t1
+    sim.reference_steps = (n, t0, t1, f"Exudyn's own solver (numberOfSteps = {n})")
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -359,6 +371,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               message=failure[0] if failure else stopped[0] if stopped else "reached endTime")
     if stepper.n_jacobians:
         st["n_jacobians"] = stepper.n_jacobians
+    if getattr(stepper, "stiff", None) is not None:
+        # the run was affordable, but the steps sat at the explicit method's stability limit
+        st["stiff"] = sim.stats()["stiff"]
     if tracker is not None:
         st["t_events"], st["q_events"], st["V_events"] = tracker.close()
     if controlled:

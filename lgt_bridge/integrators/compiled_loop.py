@@ -9,7 +9,7 @@ tests/core/test_compiled_loop.py). It hands back to Python
 
 - after an accepted step that reaches the stop time, or after every accepted step when
   something must run then (an ``on_step`` hook, the model's ``write_back``), and every
-  ``Simulation.BUDGET_WINDOW`` steps (the step-budget check), or every ``stride`` steps of
+  ``Simulation._budget_unit`` steps (the step-budget check), or every ``stride`` steps of
   a hook that may wait that long (a progress bar's);
 - an attempt the Python stepper does itself (the step budget spent, a stage beyond its
   chart's domain or not finite): :meth:`Simulation._step` then takes that step, with its
@@ -29,6 +29,8 @@ Used for a :class:`~.rkmk.AdaptiveRK` stepper on a
 """
 import numpy as np
 
+from .. import diagnosis as _diagnosis
+from ..end_jump import collapsed
 from ..errors import ModelError
 from ..kernels import entry_point
 from ..kernels import steps as _s
@@ -128,7 +130,7 @@ class Loop:
         C[_s.STIFF_T], C[_s.STIFF_H], C[_s.STIFF_RHO] = st.stiff if st.stiff is not None else (np.nan,) * 3
         C[_s.ERRPREV], C[_s.CAP] = ctl._err_prev, ctl._cap
         C[_s.MAXSTEP], C[_s.MINSTEP] = sim.max_step, sim.min_step
-        C[_s.EACH], C[_s.BUDGET] = each, sim.BUDGET_WINDOW
+        C[_s.EACH], C[_s.BUDGET] = each, sim._budget_unit
         C[_s.ROLL] = C[_s.ACC] = 0.0
         prob = st.prob
         prob._W0[:] = st.W                 # the step's start: W0 here, q_k and p_k the problem's base
@@ -221,16 +223,16 @@ class Loop:
                 sim.model.write_back(st.q, st.V, sim.t)
                 if on_step is not None:
                     on_step(sim.t, st.q, st.V)
-                if sim.n_steps % sim.BUDGET_WINDOW == 0:
-                    sim._check_affordable()
+                if sim.n_steps % sim._budget_unit == 0:
+                    _diagnosis.budget_tick(sim)
                 target = sim.t_end
                 if (sim.h < sim.min_step and sim.h < C[_s.HBEFORE]
                         and sim.t < target - 1e-12 * max(1.0, abs(target))):
-                    sim._collapsed(on_step)
+                    collapsed(sim, on_step)
             elif code == _s.PY_STEP:
                 sim._step(sim.t_end, on_step)
             elif code == _s.MIN_STEP:
-                sim._collapsed(on_step)
+                collapsed(sim, on_step)
             else:
                 raise sim._too_small(underflow=code == _s.UNDERFLOW)
             if not sim.t < stop - tol:

@@ -202,14 +202,16 @@ def load_pulse_exact():
 
 
 # ---------------------------------------------------------------------------- item 10
-def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0):
+def stiff_spring_chain(n=5, k=1e7, t_end=1.0, steps=100, damping=10.0, hanging=False):
     """A chain of n mass points (1 kg) on ObjectConnectorSpringDamper springs of stiffness k
-    (1e7 N/m: a period of 2 ms), the first hung from ground, under gravity."""
+    (1e7 N/m: a period of 2 ms), the first hung from ground, under gravity: laid out along x
+    (it swings down), or ``hanging`` along -y (it only stretches)."""
     mbs = _system()
     ground = mbs.AddObject(ObjectGround())
     prev = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
     for i in range(n):
-        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.1 * (i + 1), 0, 0]))
+        at = [0, -0.1 * (i + 1), 0] if hanging else [0.1 * (i + 1), 0, 0]
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=at))
         mbs.AddObject(MassPoint(mass=1.0, nodeNumber=nd))
         mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
         mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[prev, mk], stiffness=k, damping=damping,
