@@ -154,16 +154,13 @@ def _rows(rows):
     return t
 
 
-def pack(model, nc_max=None, views=True):
-    """Tables and work buffers of an ExudynModel (reads its node layout ``nodes``, ``ref``,
-    ``Mbar`` (the constant twist mass matrix or None), ``nv``, ``n2``, ``n_constraints``;
-    also ``sd``, ``cons`` and ``engine`` for :func:`.kernels.f_compiled`).
+#: the tables of :func:`pack` by (nodes, sizes, M̄), without the reference coordinates
+_TABLES = {}
+_TABLES_MAX = 16
 
-    ``nc_max``: the largest number of constraint rows a solve will see (default the model's
-    ``n_constraints``). ``views``: also keep Exudyn's writable coordinate views as ``P.qpos``
-    and ``P.qvel`` (valid until the system is assembled again)."""
-    nodes = model.nodes
-    nv, n2 = int(model.nv), int(model.n2)
+
+def _tables(nodes, Mb, nv, n2, nc):
+    """(T, off, w with its reference coordinates zero, dense) of :func:`pack`."""
     vec = [[int(a), int(b)] for a, b in zip(nodes.vq, nodes.vv)]
     blocks, plain, ident = [], [], []
     for typ, idx, iv in nodes.kinds:
@@ -176,7 +173,6 @@ def pack(model, nc_max=None, views=True):
             plain.append(row)
         else:
             blocks.append(row)
-    Mb = model.Mbar
     members, sizes = components(Mb) if Mb is not None else (np.zeros(0, np.int64), np.zeros(0, np.int64))
     inverses = _block_inverses(Mb, members, sizes) if Mb is not None else None
     if Mb is not None and inverses is None:
@@ -185,7 +181,6 @@ def pack(model, nc_max=None, views=True):
         # factorize the whole M̄ (dense Cholesky, flag 2 when it is not positive definite)
         Mb = None
         members, sizes = np.zeros(0, np.int64), np.zeros(0, np.int64)
-    nc = int(model.n_constraints if nc_max is None else nc_max)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     foff = np.concatenate([[0], np.cumsum(sizes ** 2)]).astype(np.int64)
     sections = [_rows(blocks + plain), _rows(ident + vec), _rows(np.stack([start[:-1], sizes, foff[:-1]], 1)),
@@ -203,14 +198,40 @@ def pack(model, nc_max=None, views=True):
               nc * nc, nc, nv * nv if dense else 0, 2 * n2]
     off[OREF:OEND + 1] = np.concatenate([[0], np.cumsum(wsizes)])
     w = np.zeros(int(off[OEND]))
-    w[off[OREF]:off[OREF] + n2] = np.asarray(model.ref, float)
     for size, (cs, blks, inv) in (inverses or {}).items():
         at = (foff[cs][:, None] + np.arange(size * size)[None, :]).reshape(-1)
         w[off[OMB] + at] = blks.reshape(-1)
         w[off[OMBI] + at] = inv.reshape(-1)
 
+    return np.concatenate(sections), off, w, dense
+
+
+def pack(model, nc_max=None, views=True):
+    """Tables and work buffers of an ExudynModel (reads its node layout ``nodes``, ``ref``,
+    ``Mbar`` (the constant twist mass matrix or None), ``nv``, ``n2``, ``n_constraints``;
+    also ``sd``, ``cons`` and ``engine`` for :func:`.kernels.f_compiled`).
+
+    ``nc_max``: the largest number of constraint rows a solve will see (default the model's
+    ``n_constraints``). ``views``: also keep Exudyn's writable coordinate views as ``P.qpos``
+    and ``P.qvel`` (valid until the system is assembled again)."""
+    nodes = model.nodes
+    nv, n2 = int(model.nv), int(model.n2)
+    Mb = model.Mbar
+    nc = int(model.n_constraints if nc_max is None else nc_max)
+    # the tables depend on the nodes, M̄ and nc alone: kept for the next model of that kind
+    # (a system built afresh per run shares its NodeLayout; M̄ compared by value)
+    key = (id(nodes), nv, n2, nc, None if Mb is None else (Mb.shape, Mb.tobytes()))
+    got = _TABLES.get(key)
+    if got is None or got[0] is not nodes:
+        if len(_TABLES) >= _TABLES_MAX:
+            _TABLES.pop(next(iter(_TABLES)))
+        got = _TABLES[key] = (nodes, *_tables(nodes, Mb, nv, n2, nc))
+    _, T, off, w, dense = got
+    T, off, w = T.copy(), off.copy(), w.copy()      # (the kernels write T's scratch rows and w)
+    w[off[OREF]:off[OREF] + n2] = np.asarray(model.ref, float)
+
     P = Pack()
-    P.T, P.off, P.w = np.concatenate(sections), off, w
+    P.T, P.off, P.w = T, off, w
     P.nv, P.n2, P.nc_max, P.constant_mass = nv, n2, nc, not dense
     P.ref = w[off[OREF]:off[OREF] + n2]
     P.qm = w[off[OQM]:off[OQM] + n2]
