@@ -1,5 +1,6 @@
 """What ExudynModel keeps from one system for the next one built alike (the NodeLayout shared by
-node signature, the initial coordinates' check, the kernels' tables by M̄'s value): a model of
+node signature, the initial coordinates' check, the kernels' tables by M̄'s value, and with the
+layout the finished steppers of :mod:`lgt_bridge.integrators.steppers`): a model of
 a system built afresh must run exactly as with nothing kept, whatever differs between the
 systems (masses, inertias, names, node types, initial states)."""
 import numpy as np
@@ -10,6 +11,7 @@ exu = pytest.importorskip("exudyn")
 from exudyn.utilities import RigidBodyInertia  # noqa: E402
 
 from lgt_bridge import InputError, simulate  # noqa: E402
+from lgt_bridge.integrators import steppers  # noqa: E402
 from lgt_exudyn import kernel_tables, layout  # noqa: E402
 from lgt_exudyn.model import ExudynModel  # noqa: E402
 
@@ -39,6 +41,7 @@ def forget():
     """Nothing kept: the next model is built as the first one of its kind."""
     layout._LAYOUTS.clear()
     kernel_tables._TABLES.clear()
+    steppers._POOL.clear()
 
 
 def run(make, **kw):
