@@ -41,6 +41,7 @@ def forget():
     """Nothing kept: the next model is built as the first one of its kind."""
     layout._LAYOUTS.clear()
     kernel_tables._TABLES.clear()
+    kernel_tables._BLOCKS.clear()
     steppers._POOL.clear()
 
 
