@@ -24,7 +24,7 @@ from .problem import make_problem
 #: finished steppers by (layout id, method, groups, charts, options, engine bodies) -> (layout,
 #: stepper); the oldest dropped first
 _POOL = {}
-POOL_MAX = 8
+POOL_MAX = 16
 
 
 def make_stepper(model, method, group=DEFAULT_GROUP, chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
