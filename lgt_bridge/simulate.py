@@ -2,6 +2,7 @@
 :class:`~lgt_bridge.simulation.Simulation`, set up and run once)."""
 from .lgt import DEFAULT_GROUP
 from .result import SimulationResult
+from .integrators.steppers import release
 from .simulation import Simulation, make_stepper
 from .validation import check_inputs
 
@@ -101,7 +102,10 @@ def simulate(model, t_span, *, method="rkmk4", group=DEFAULT_GROUP, chart="exp",
     sim = Simulation(model, method=method, group=group, chart=chart, dt=dt, rtol=rtol, atol=atol,
                      t0=t0, t_end=t1, q0=q0, V0=V0, max_steps=max_steps, project=project,
                      rho_inf=rho_inf, newton_tol=newton_tol, max_step=max_step, checked=True)
-    return sim.run(t1, t_eval, progress, events)
+    result = sim.run(t1, t_eval, progress, events)
+    if events is None:
+        release(sim.stepper)         # kept for the next run of this kind (nothing of it is returned)
+    return result
 
 
 __all__ = ["simulate", "SimulationResult", "Simulation", "make_stepper"]

@@ -29,25 +29,12 @@ from . import switches as _switches
 from .end_jump import collapsed
 from .errors import ChartDomainError, InputError, ModelError
 from .integrators.base import StepFailed
-from .integrators import registry as _registry
-from .integrators.constraints import Projector, note_initial_projection, project_initial
-from .integrators.problem import make_problem
+from .integrators.constraints import note_initial_projection, project_initial
+from .integrators.steppers import make_stepper
 from .lgt import DEFAULT_GROUP
 from .progress import simulation_bar
 from .result import SimulationResult, collect
 from .validation import check_options, check_state, check_t_eval
-
-
-def make_stepper(model, method, group=DEFAULT_GROUP, chart="exp", *, dt=None, rtol=1e-6, atol=1e-8,
-                 project=True, rho_inf=0.9, newton_tol=1e-10, span=None, fixed_steps=False):
-    """The stepper behind a method name (the registry's builder), with its local problem
-    and projector. Returns (stepper, dt): dt is the (macro) step to use (None: adaptive)."""
-    spec = _registry.get(method)
-    prob = make_problem(model, group, chart)
-    projector = Projector(model) if (spec.projects and project and model.n_constraints) else None
-    stepper = spec.build(prob, dt=dt, rtol=rtol, atol=atol, projector=projector, rho_inf=rho_inf,
-                         newton_tol=newton_tol, fixed_steps=fixed_steps)
-    return stepper, stepper.step_size(dt, span)
 
 
 class Simulation:

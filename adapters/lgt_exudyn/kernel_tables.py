@@ -154,16 +154,35 @@ def _rows(rows):
     return t
 
 
-def pack(model, nc_max=None, views=True):
-    """Tables and work buffers of an ExudynModel (reads its node layout ``nodes``, ``ref``,
-    ``Mbar`` (the constant twist mass matrix or None), ``nv``, ``n2``, ``n_constraints``;
-    also ``sd``, ``cons`` and ``engine`` for :func:`.kernels.f_compiled`).
+#: the tables of :func:`pack` by nodes, sizes and M̄'s blocks (not their values); the
+#: components and block inverses of M̄ by its value
+_TABLES, _BLOCKS = {}, {}
+_TABLES_MAX = 16
+_NONE = np.zeros(0, np.int64)
 
-    ``nc_max``: the largest number of constraint rows a solve will see (default the model's
-    ``n_constraints``). ``views``: also keep Exudyn's writable coordinate views as ``P.qpos``
-    and ``P.qvel`` (valid until the system is assembled again)."""
-    nodes = model.nodes
-    nv, n2 = int(model.nv), int(model.n2)
+
+def _kept(cache, key, make):
+    got = cache.get(key)
+    if got is None:
+        if len(cache) >= _TABLES_MAX:
+            cache.pop(next(iter(cache)))
+        got = cache[key] = make()
+    return got
+
+
+def _mass_blocks(Mb):
+    """(members, sizes, inverses) of M̄ (:func:`components`, :func:`_block_inverses`), kept by
+    M̄'s value (a system built afresh with the same masses); inverses None when a block is
+    not positive definite."""
+    def make():
+        members, sizes = components(Mb)
+        return members, sizes, _block_inverses(Mb, members, sizes)
+    return _kept(_BLOCKS, (Mb.shape, Mb.tobytes()), make)
+
+
+def _tables(nodes, members, sizes, nv, n2, nc, dense):
+    """(T, off, w without reference coordinates and M̄'s blocks, the blocks' offsets foff) of
+    :func:`pack`."""
     vec = [[int(a), int(b)] for a, b in zip(nodes.vq, nodes.vv)]
     blocks, plain, ident = [], [], []
     for typ, idx, iv in nodes.kinds:
@@ -176,16 +195,6 @@ def pack(model, nc_max=None, views=True):
             plain.append(row)
         else:
             blocks.append(row)
-    Mb = model.Mbar
-    members, sizes = components(Mb) if Mb is not None else (np.zeros(0, np.int64), np.zeros(0, np.int64))
-    inverses = _block_inverses(Mb, members, sizes) if Mb is not None else None
-    if Mb is not None and inverses is None:
-        # a diagonal block of M̄ is not positive definite (massless coordinates, e.g. an
-        # ANCF beam section without torsional inertia): no packed inverse; the kernels then
-        # factorize the whole M̄ (dense Cholesky, flag 2 when it is not positive definite)
-        Mb = None
-        members, sizes = np.zeros(0, np.int64), np.zeros(0, np.int64)
-    nc = int(model.n_constraints if nc_max is None else nc_max)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     foff = np.concatenate([[0], np.cumsum(sizes ** 2)]).astype(np.int64)
     sections = [_rows(blocks + plain), _rows(ident + vec), _rows(np.stack([start[:-1], sizes, foff[:-1]], 1)),
@@ -198,11 +207,40 @@ def pack(model, nc_max=None, views=True):
     off[N2_], off[NV_], off[NC_] = n2, nv, nc
     # w: ref, q_m, rotation blocks, scratch T, M̄⁻¹Q̄, M̄ blocks, M̄⁻¹ blocks, Y, S, L, r,
     # dense M̄ factor, z and u (n2 each)
-    dense = Mb is None
     wsizes = [n2, n2, 12 * len(blocks), max(nv, 12), nv, int(foff[-1]), int(foff[-1]), nc * nv, nc * nc,
               nc * nc, nc, nv * nv if dense else 0, 2 * n2]
     off[OREF:OEND + 1] = np.concatenate([[0], np.cumsum(wsizes)])
-    w = np.zeros(int(off[OEND]))
+    return np.concatenate(sections), off, np.zeros(int(off[OEND])), foff
+
+
+def pack(model, nc_max=None, views=True):
+    """Tables and work buffers of an ExudynModel (reads its node layout ``nodes``, ``ref``,
+    ``Mbar`` (the constant twist mass matrix or None), ``nv``, ``n2``, ``n_constraints``;
+    also ``sd``, ``cons`` and ``engine`` for :func:`.kernels.f_compiled`).
+
+    ``nc_max``: the largest number of constraint rows a solve will see (default the model's
+    ``n_constraints``). ``views``: also keep Exudyn's writable coordinate views as ``P.qpos``
+    and ``P.qvel`` (valid until the system is assembled again)."""
+    nodes = model.nodes
+    nv, n2 = int(model.nv), int(model.n2)
+    nc = int(model.n_constraints if nc_max is None else nc_max)
+    members, sizes, inverses = _mass_blocks(model.Mbar) if model.Mbar is not None else (_NONE, _NONE, None)
+    # no inverses: no constant M̄, or a diagonal block of M̄ is not positive definite (massless
+    # coordinates, e.g. an ANCF beam section without torsional inertia): the kernels then
+    # factorize the whole M̄ (dense Cholesky, flag 2 when it is not positive definite)
+    dense = inverses is None
+    if dense:
+        members, sizes = _NONE, _NONE
+    # the tables depend on the nodes, nc and M̄'s blocks alone: kept for the next model of that
+    # kind (a system built afresh per run shares its NodeLayout), each model given copies
+    # (the kernels write T's scratch rows and w)
+    key = (id(nodes), nv, n2, nc, dense, members.tobytes(), sizes.tobytes())
+    got = _TABLES.get(key)
+    if got is None or got[0] is not nodes:     # (the entry is the NodeLayout's, not another's at its id)
+        _TABLES.pop(key, None)
+        got = _kept(_TABLES, key, lambda: (nodes, *_tables(nodes, members, sizes, nv, n2, nc, dense)))
+    _, T, off, w, foff = got
+    T, off, w = T.copy(), off.copy(), w.copy()
     w[off[OREF]:off[OREF] + n2] = np.asarray(model.ref, float)
     for size, (cs, blks, inv) in (inverses or {}).items():
         at = (foff[cs][:, None] + np.arange(size * size)[None, :]).reshape(-1)
@@ -210,7 +248,7 @@ def pack(model, nc_max=None, views=True):
         w[off[OMBI] + at] = inv.reshape(-1)
 
     P = Pack()
-    P.T, P.off, P.w = np.concatenate(sections), off, w
+    P.T, P.off, P.w = T, off, w
     P.nv, P.n2, P.nc_max, P.constant_mass = nv, n2, nc, not dense
     P.ref = w[off[OREF]:off[OREF] + n2]
     P.qm = w[off[OQM]:off[OQM] + n2]

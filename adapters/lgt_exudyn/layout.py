@@ -21,31 +21,61 @@ VECTOR = ("Point", "Point2D", "RigidBody2D", "GenericODE2", "1D", "PointSlope1",
           "PointSlope23", "Point2DSlope1", "Point3DSlope1", "Point3DSlope23")
 
 
+def node_signature(mbs):
+    """What a :class:`NodeLayout` is made of, read from the system: its ODE2 size and, per
+    node, (node number, type, ODE2 coordinates, AE coordinates of Euler parameters, name)."""
+    sd = mbs.systemData
+    rows = []
+    for i in range(sd.NumberOfNodes()):
+        node = mbs.GetNode(i)
+        typ = node["nodeType"]
+        try:
+            idx = tuple(int(k) for k in sd.GetNodeLTGODE2(i))
+        except Exception:                           # nodes without ODE2 coordinates
+            idx = ()
+        ae = tuple(int(k) for k in sd.GetNodeLTGAE(i)) if typ == "RigidBodyEP" else ()
+        rows.append((i, typ, idx, ae, node.get("name", f"node{i}")))
+    return (int(sd.ODE2Size()), tuple(rows))
+
+
+#: NodeLayouts by signature (systems built alike share one; the oldest dropped first)
+_LAYOUTS = {}
+_LAYOUTS_MAX = 16
+
+
+def node_layout(mbs):
+    """The :class:`NodeLayout` of an assembled system: one object for all systems whose nodes
+    have the same :func:`node_signature` (a NodeLayout holds nothing else of the system), so
+    a system built afresh for every run shares its layout, and what is kept on it (the
+    bridge's layout analysis, the initial coordinates checked), with the last one."""
+    sig = node_signature(mbs)
+    got = _LAYOUTS.get(sig)
+    if got is None:
+        got = NodeLayout(mbs, sig)             # InputError for an unsupported node: nothing kept
+        if len(_LAYOUTS) >= _LAYOUTS_MAX:
+            _LAYOUTS.pop(next(iter(_LAYOUTS)))
+        _LAYOUTS[sig] = got
+    return got
+
+
 class NodeLayout:
     """The ODE2 nodes of an assembled system: ``kinds`` (one ``(node type, q indices, first V
     index)`` per rigid node), ``layout`` (lgt_bridge's), ``nv``, ``n2``, ``ep_ae`` (the AE
-    rows of the Euler-parameter normalizations), and the velocity maps H, H⁺, Ḣ V."""
+    rows of the Euler-parameter normalizations), and the velocity maps H, H⁺, Ḣ V. Made from
+    the nodes' :func:`node_signature` alone (``sig``: read from ``mbs`` when not given)."""
 
-    def __init__(self, mbs):
-        sd = mbs.systemData
-        self.n2 = sd.ODE2Size()
+    def __init__(self, mbs, sig=None):
+        self.n2, rows = node_signature(mbs) if sig is None else sig
         bodies, vq, ep_ae, kinds, vnode = [], [], [], [], []
         iv = 0
         vidx_of_q = np.full(self.n2, -1)
-        for i in range(sd.NumberOfNodes()):
-            node = mbs.GetNode(i)
-            typ = node["nodeType"]
-            try:
-                idx = list(sd.GetNodeLTGODE2(i))
-            except Exception:                           # nodes without ODE2 coordinates
-                idx = []
+        for i, typ, idx, ae, name in rows:
+            idx = list(idx)
             if typ in RIGID:
-                bodies.append(RigidBody(RIGID[typ], tuple(idx[:3]), tuple(idx[3:]), tuple(range(iv, iv + 6)),
-                                        node.get("name", f"node{i}")))
+                bodies.append(RigidBody(RIGID[typ], tuple(idx[:3]), tuple(idx[3:]), tuple(range(iv, iv + 6)), name))
                 kinds.append((typ, np.array(idx), iv))
                 iv += 6
-                if typ == "RigidBodyEP":
-                    ep_ae += list(sd.GetNodeLTGAE(i))
+                ep_ae += list(ae)
             elif typ == "PointGround" or not len(idx):
                 continue                                       # no ODE2 coordinates
             elif typ in VECTOR:
@@ -55,7 +85,7 @@ class NodeLayout:
                     vidx_of_q[k] = iv
                     iv += 1
             else:
-                raise InputError(f"Exudyn node {i} ({node.get('name', '')!r}) has type {typ!r}, which "
+                raise InputError(f"Exudyn node {i} ({name!r}) has type {typ!r}, which "
                                  f"lgt_bridge does not support; supported rigid nodes: {sorted(RIGID)}, "
                                  f"vector-space nodes: {list(VECTOR)}. Run this model with Exudyn's own "
                                  "exu.SolveDynamic, or build it from supported nodes.")
@@ -75,14 +105,20 @@ class NodeLayout:
         self.vq = np.array(self.layout.vector_q, int)
         self.vv = np.array(self.layout.vector_v, int)
         self._tau = {}
+        self._valid = None             # (q0, ref) as bytes, the last pair check_initial passed
 
     def check_initial(self, q0, ref):
         """InputError when a node's initial coordinates are not valid (Euler parameters: the
-        total of reference and initial coordinates must be a unit quaternion)."""
+        total of reference and initial coordinates must be a unit quaternion). The last pair
+        that passed is not checked again (systems built alike share their NodeLayout)."""
+        key = (q0.tobytes(), np.asarray(ref).tobytes())
+        if key == self._valid:
+            return
         for (typ, _, _), b in zip(self.kinds, self.layout.bodies):
             if typ == "RigidBodyEP":
                 _check_euler_parameters(b, q0, ref)
             b.param.validate(q0[[*b.pos, *b.rot]], f"initial coordinates of Exudyn node '{b.name}'")
+        self._valid = key
 
     # ------------------------------------------------------------------ velocity maps
     def owner(self, mbs, iv):
@@ -141,15 +177,19 @@ class NodeLayout:
         """Without rotation coordinates H is a 0/1 selection, H[qi[j], j] = 1: qi (nv), so
         that Hᵀ J H = J[qi][:, qi]; None with rotation coordinates (``rotvec``: except
         RotVecLG rotations, whose block of H is the identity too)."""
+        got = self.__dict__.setdefault("_selection", {})
+        if rotvec in got:
+            return None if got[rotvec] is None else got[rotvec].copy()
         rot = [t for t in self.types if not (rotvec and t == "RigidBodyRotVecLG")]
-        if rot or self.n2 != self.nv:
-            return None
-        qi = np.empty(self.nv, int)
-        qi[self.lin_v.ravel()] = self.pos_q.ravel()
-        for rq, wv in self.types.values():
-            qi[wv.ravel()] = rq.ravel()
-        qi[self.vv] = self.vq
-        return qi
+        qi = None
+        if not (rot or self.n2 != self.nv):
+            qi = np.empty(self.nv, int)
+            qi[self.lin_v.ravel()] = self.pos_q.ravel()
+            for rq, wv in self.types.values():
+                qi[wv.ravel()] = rq.ravel()
+            qi[self.vv] = self.vq
+        got[rotvec] = qi
+        return None if qi is None else qi.copy()
 
     def H_sparse(self, q):
         """H(q) as a scipy CSR matrix (a few entries per row: large models)."""
@@ -321,7 +361,7 @@ def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
         engine.sd.SetODE2Coordinates(q - engine.ref)
         M = engine.mass_matrix()
         if qi is not None:
-            Ms.append(M[qi[:, None], qi])
+            Ms.append(M)           # (compared as they are: permuting moves no entry's size)
             continue
         H, Hp = sparse(nodes.H(q)), sparse(nodes.H_pinv(q))
         Mb = np.asarray((H.T @ (H.T @ M).T).T)                         # Hᵀ M H
@@ -330,8 +370,10 @@ def constant_twist_mass(engine, nodes, q0, rng=np.random.default_rng(7)):
             break
         Ms.append(Mb)
     else:
-        if all(np.abs(m - Ms[0]).max() <= 1e-12 * max(1.0, np.abs(Ms[0]).max()) for m in Ms):
-            Mbar = 0.5 * (Ms[0] + Ms[0].T)
+        tol = 1e-12 * max(1.0, np.abs(Ms[0]).max())
+        if all(np.abs(m - Ms[0]).max() <= tol for m in Ms[1:]):
+            M0 = Ms[0] if qi is None else Ms[0][qi[:, None], qi]
+            Mbar = 0.5 * (M0 + M0.T)
     engine.sd.SetODE2Coordinates(q0 - engine.ref)
     return Mbar
 

@@ -19,7 +19,7 @@ from lgt_bridge.switches import REDO
 from . import constraints as _constraints
 from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_set_up, guarded_f
-from .layout import NodeLayout, constant_twist_mass
+from .layout import constant_twist_mass, node_layout
 from .hooks import StepHooks, has_prestep
 from .iteration import newton_matrix, residual_function
 from .ode1 import ODE1States
@@ -69,7 +69,7 @@ class ExudynModel(StepHooks, Model):
         if not getattr(mbs, "systemIsConsistent", False):
             raise InputError("Exudyn system is not assembled (mbs.systemIsConsistent is False); "
                              "call mbs.Assemble() before wrapping it.")
-        nodes = self.nodes = NodeLayout(mbs)
+        nodes = self.nodes = node_layout(mbs)
         engine = self.engine = Engine(mbs)
         self.mbs = mbs
         self._take_residual_user_function()     # called before each residual (hooks.py)

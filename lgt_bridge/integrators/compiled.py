@@ -35,19 +35,25 @@ class CompiledProblem(LocalProblem):
         # part of every call
         self._X, self._W, self._q, self._V, self._W0, self._qk, self._xd = [w[i:j] for i, j in self._slices]
         self._pk, self._p = [w[i:j].reshape(-1, 4) for i, j in self._quat_slices]
-        # the stages' f and its velocity argument: f(q, V) or the engine's f(q, v) (v written
-        # by the stage kernel, V̇ read in the engine's form: model.engine_velocity)
+        self.bind(model)
+        self._Xd = np.zeros(self.nX)
+        self._W0_src = None            # the array last copied into the W0 slot
+        self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
+        self._pending = None           # (i, t, ts) of that stage
+
+    def bind(self, model):
+        """The stages' f and its velocity argument: f(q, V) or the engine's f(q, v) (v written
+        by the stage kernel, V̇ read in the engine's form: model.engine_velocity). A problem
+        kept for reuse (:mod:`.steppers`) is bound to the next model of its layout here."""
+        self.model = model
         self._fs, self._vs = model.f, self._V
         eng = getattr(model, "engine_velocity", None)
         if eng is not None and len(eng.bodies):
             bodies = eng.bodies
             got = self._engine_I.get(bodies) if type(bodies) is tuple else None    # (made before)
             self._I = got if got is not None else self._engine_tables(tuple(int(b) for b in bodies))
+            w = self.work
             self._fs, self._vs = eng.f, w[self._ve_slice[0]:self._ve_slice[1]]
-        self._Xd = np.zeros(self.nX)
-        self._W0_src = None            # the array last copied into the W0 slot
-        self._vd = _NONE               # the model's V̇ of the last stage, not yet converted
-        self._pending = None           # (i, t, ts) of that stage
 
     @staticmethod
     def analyze(model, group, chart):

@@ -291,6 +291,7 @@ def test_compiled_step_loop_takes_the_python_loops_steps(torques):
         runs.append((np.concatenate([r.q for r in rs]), sim.n_steps, sim.stepper.prob.n_f,
                      getattr(sim.stepper, "_compiled_loop", None)))
     (qa, na, fa, loop), (qb, nb, fb, none) = runs
-    assert loop is not None and loop.runs >= 4 and none is None
+    # (a stepper kept for reuse has its loop from the start: the Python loop's never ran it)
+    assert loop is not None and loop.runs >= 4 and (none is None or none.runs == 0)
     assert na == nb and fa == fb and na > 8
     np.testing.assert_allclose(qa, qb, rtol=1e-12, atol=1e-14)
