@@ -250,18 +250,20 @@ def factorize(J, L=None, compiled=False, memo=None):
         L = sparse.csr_matrix(L)
         return lambda r: solve(L @ r)
     import scipy.linalg as sla
-    Jd = J.toarray() if sparse.issparse(J) else J
-    if L is not None:
-        # J⁻¹L formed by numpy's gesv: scipy's lu_solve on a matrix right-hand side is
-        # OpenBLAS's threaded trsm below 32 rows, ~15 ms a call while the cores are busy
-        # (5-15 µs by numpy; a singular J raises LinAlgError)
-        return np.linalg.solve(Jd, L.toarray() if sparse.issparse(L) else L).dot
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sla.LinAlgWarning)       # reported below
-        lu = sla.lu_factor(Jd, check_finite=False)
+        lu = sla.lu_factor(J.toarray() if sparse.issparse(J) else J, check_finite=False)
     if not np.all(np.diag(lu[0])):
         raise np.linalg.LinAlgError("the matrix is exactly singular")
-    return lambda r: sla.lu_solve(lu, r, check_finite=False)
+    if L is None:
+        return lambda r: sla.lu_solve(lu, r, check_finite=False)
+    # J⁻¹L column by column: scipy's lu_solve on a matrix right-hand side is OpenBLAS's
+    # threaded trsm below 32 rows, ~15 ms a call while the cores are busy (a column: 5-10 µs)
+    L = L.toarray() if sparse.issparse(L) else np.asarray(L)
+    X = np.empty((J.shape[0], L.shape[1]))
+    for j in range(L.shape[1]):
+        X[:, j] = sla.lu_solve(lu, L[:, j], check_finite=False)
+    return X.dot
 
 
 #: a band (lower + upper width) up to this fraction of the unknowns is factored banded
