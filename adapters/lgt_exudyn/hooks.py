@@ -219,9 +219,22 @@ def has_prestep(mbs):
         return False
 
 
-#: contact objects with the data coordinate that holds their gap (Exudyn's documentation
-#: and PostNewton of each)
-GAP_OBJECTS = {"ContactSphereSphere": 0, "ConnectorRollingDiscPenalty": 2}
+#: contact objects with the data coordinates that hold their gaps, as offsets among the n data
+#: coordinates of the object's node (Exudyn's documentation and PostNewton of each). Their
+#: forces act while the gap stored by the last PostNewton is closed, so a closing or opening
+#: not located would switch the force on or off only at the end of the step it falls in
+#: (ObjectContactConvexRoll and ObjectContactCoordinate: 0.4 % off at any tolerance, the
+#: error of a contact onset late by up to Exudyn's step)
+GAP_OBJECTS = {
+    "ContactSphereSphere": lambda o, n: [0],
+    "ContactSphereTorus": lambda o, n: [0],
+    "ContactConvexRoll": lambda o, n: [0],
+    "ContactCoordinate": lambda o, n: [0],
+    "ConnectorRollingDiscPenalty": lambda o, n: [2],
+    # one gap per contact segment, first (then the friction states)
+    "ContactCircleCable2D": lambda o, n: range(min(n, int(o.get("numberOfContactSegments", n)))),
+    "ContactFrictionCircleCable2D": lambda o, n: range(min(n, int(o.get("numberOfContactSegments", n // 3)))),
+}
 #: objects whose force reads a velocity their PostNewton stored at the last step's end
 LAGGED_OBJECTS = {"ConnectorRollingDiscPenalty": "its friction force acts along the slip velocity stored at the "
                                                  "last step's end (data coordinates 0, 1)"}
@@ -242,9 +255,10 @@ def gap_rows(mbs):
     for k, kind, o in objects(mbs):
         if kind in GAP_OBJECTS and "nodeNumber" in o:
             try:
-                rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[GAP_OBJECTS[kind]]))
-            except Exception:
-                pass
+                ltg = list(sd.GetNodeLTGData(int(o["nodeNumber"])))
+            except Exception:           # no data node (an invalid nodeNumber)
+                continue
+            rows += [int(ltg[i]) for i in GAP_OBJECTS[kind](o, len(ltg)) if 0 <= i < len(ltg)]
     return np.array(rows, int)
 
 
