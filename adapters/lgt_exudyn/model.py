@@ -459,11 +459,19 @@ class ExudynModel(StepHooks, Model):
         A = self._jacobian2(q2) if self.n_constraints else None
         d = mass_defects(M, A) or (mass_defects(M) if A is not None else [])   # M̄⁻¹ is formed
         if d:
-            raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
-                             + " Exudyn's implicit solvers (generalized-α) can run such a model, since "
-                             "their iteration matrix includes the stiffness; run it with Exudyn's own "
-                             "exu.SolveDynamic, or give these coordinates mass (an ANCF beam's "
-                             "sectionData.inertia: no zero entry).")
+            owners = [self.nodes.owner(self.mbs, i) for i, _ in d]
+            if any("ObjectANCFBeam " in o for o in owners):
+                # its cross-section slopes: rank 3 of 6 in M, whatever sectionData.inertia
+                fix = (" Exudyn's ObjectANCFBeam has such a mass matrix whatever its sectionData: three "
+                       "directions of the slope coordinates of each node carry no inertia. Run it with "
+                       "Exudyn's own exu.SolveDynamic (generalized-α: its iteration matrix includes the "
+                       "stiffness), or use ObjectBeamGeometricallyExact.")
+            else:
+                fix = (" Exudyn's implicit solvers (generalized-α) can run such a model, since their "
+                       "iteration matrix includes the stiffness; run it with Exudyn's own "
+                       "exu.SolveDynamic, or give these coordinates mass (an ANCF cable's or beam's "
+                       "inertia: no zero entry).")
+            raise InputError(mass_message(d, owners) + fix)
 
     # ------------------------------------------------------------------ compiled backend
     def reset_caches(self):
