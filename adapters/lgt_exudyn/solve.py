@@ -378,6 +378,11 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     mbs.sys["lgtBridgeStats"] = st
     if storeSolver:
         mbs.sys["dynamicSolver"] = solver
+        # its step counters count the bridge's steps, as Exudyn's own adaptive solvers count
+        # theirs (currentStepIndex - 1: steps taken; Exudyn's explicitLieGroupIntegratorTest.py
+        # reads it): Exudyn's loop here only stepped from output to output
+        solver.it.currentStepIndex = sim.n_steps + 1
+        solver.it.rejectedAutomaticStepSizeSteps = stepper.n_rejected
     if verbose or (verbose is None and ti.verboseMode > 0):
         print(f"lgt-bridge: SolveDynamic {describe(st)}: {sim.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")
