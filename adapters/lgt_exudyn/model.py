@@ -166,13 +166,14 @@ class ExudynModel(StepHooks, Model):
         moved by more than timeIntegration.discontinuous.iterationTolerance, else False."""
         self.write_back(q, V, t)
         gaps, modes = self._gap_rows, self._mode_rows
-        d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) else None
+        d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) or self._circle_rows else None
         moved = float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol
         # a contact gap that changes sign (the contact closing or opening), or a mode whose sign
         # changes (a limit stop reached or left, stick <-> slip), is a switch to locate however
         # small the force error; a force error alone redoes the step, as Exudyn iterates
         d1 = None if d0 is None else np.array(self.sd.GetDataCoordinates())
-        if d1 is not None and (np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes]))):
+        if d1 is not None and (np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes]))
+                               or self._circles_switched(d0, d1)):
             return True
         return REDO if moved else False
 

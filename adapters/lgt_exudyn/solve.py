@@ -201,6 +201,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                      fixed_steps=fixed_tableau, min_step=float(ti.minimumStepSize), max_step=h_cap,
                      checked=True)
     group, chart, stepper = sim.group, sim.chart, sim.stepper
+    if hasattr(model, "locate_circle_contacts"):
+        model.locate_circle_contacts = controlled   # (hooks.curve_circle_rows)
     if not controlled:
         sim.min_step = 0.0
     else:

@@ -5,14 +5,18 @@ simulationSettings, node)`` freshly assembled:
 - a mass point dropped onto a floor through an ObjectContactCoordinate (Exudyn's
   contactCoordinateTest.py);
 - a barrel-shaped roll dropped onto the floor, tilted, through an ObjectContactConvexRoll
-  (Exudyn's ConvexContactTest.py, without its spin and friction).
+  (Exudyn's ConvexContactTest.py, without its spin and friction);
+- a disc (2-D rigid body) dropped onto a floor of eight segments through an
+  ObjectContactCurveCircles, rolling over the segments' ends (Exudyn's chainDriveExample.py
+  and contactCurveExample.py: rollers on a sprocket's polygon).
 """
 import numpy as np
 
 import exudyn as exu
 from exudyn.utilities import (InertiaCylinder, MarkerBodyRigid, MarkerNodeCoordinate, MarkerNodeRigid,
                               MassPoint, LoadCoordinate, NodeGenericData, NodePoint, NodePointGround,
-                              ObjectContactConvexRoll, ObjectContactCoordinate, ObjectGround, RotationMatrixY)
+                              ObjectContactConvexRoll, ObjectContactCoordinate, ObjectContactCurveCircles,
+                              ObjectGround, RotationMatrixY)
 
 
 def _settings(t_end, n):
@@ -58,3 +62,26 @@ def convex_roll_dropped(t_end=0.1, n=200):
                                           rollLength=0.1, coefficientsHull=[-3.6, 0, 1.65e-2]))
     mbs.Assemble()
     return mbs, _settings(t_end, n), node
+
+
+def disc_on_curve(t_end=0.3, n=300):
+    """A disc of radius 5 cm (2-D rigid body) released 5 cm above a floor of eight segments
+    with 0.3 m/s sideways; it bounces on the contact spring (1e4 N/m, 2 Ns/m) and rolls over
+    from one segment to the next (no friction)."""
+    mbs = exu.SystemContainer().AddSystem()
+    ground = mbs.CreateGround()
+    m_ground = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    r = 0.05
+    disc = mbs.CreateRigidBody(referencePosition=[0.013, 0.1, 0], initialVelocity=[0.3, 0, 0],
+                               inertia=InertiaCylinder(density=1000, length=0.02, outerRadius=r, axis=2),
+                               gravity=[0, -9.81, 0], create2D=True)
+    m_disc = mbs.AddMarker(MarkerBodyRigid(bodyNumber=disc))
+    xs = np.linspace(0.5, -0.5, 9)          # right to left: the exterior (above) is on the right
+    segments = np.array([[xs[i], 0.0, xs[i + 1], 0.0] for i in range(len(xs) - 1)])
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[-1, 0, 0] * len(segments),
+                                       numberOfDataCoordinates=3 * len(segments)))
+    mbs.AddObject(ObjectContactCurveCircles(markerNumbers=[m_ground, m_disc], nodeNumber=data, circlesRadii=[r],
+                                            segmentsData=exu.MatrixContainer(segments),
+                                            contactStiffness=1e4, contactDamping=2))
+    mbs.Assemble()
+    return mbs, _settings(t_end, n), mbs.GetObject(disc)["nodeNumber"]
