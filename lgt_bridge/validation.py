@@ -238,17 +238,24 @@ def check_mass(model, q0):
         raise InputError(mass_message(defects, [model.layout.owner("V", i) for i, _ in defects]))
 
 
+#: a scaled eigenvalue of M below minus this is negative inertia; above it (to rtol) it is
+#: zero up to rounding (ObjectANCFBeam: -1.1e-15)
+NEGATIVE_INERTIA = 1e-9
+
+
 def mass_message(defects, owners):
     """InputError text for ``mass_defects`` output; ``owners`` names each defect's index."""
     i, lam = defects[0]
-    kind = "indefinite" if lam < 0 else "singular"
+    # an eigenvalue of the scaled M at rounding level is zero, whatever its sign
+    negative = lam < -NEGATIVE_INERTIA
+    kind = "indefinite" if negative else "singular"
     names = list(dict.fromkeys(owners))
     more = ""
     if len(defects) > 1:
         more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
                 + (", ..." if len(names) > 6 else ""))
     return (f"mass matrix at q0 is {kind}: the motion of {owners[0]} (velocity index {i}) has "
-            f"{'negative' if lam < 0 else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
+            f"{'negative' if negative else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
             "Its acceleration is undefined and an integrator would fail or crawl to max_steps. "
             "Give every moving body a positive mass and positive principal inertias (a "
             "zero-inertia link: merge it into its parent, or add a small rotor inertia/armature).")

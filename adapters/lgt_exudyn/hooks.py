@@ -43,11 +43,21 @@ class StepHooks:
             self.max_discontinuous = max(0, int(disc.maxIterations))
             self.ignore_max_discontinuous = bool(disc.ignoreMaxIterations)
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
+            self._circle_rows = curve_circle_rows(mbs)
+            self.locate_circle_contacts = False     # the drop-in sets it for error-controlled runs
             note_lagged_objects(mbs)
             refuse_impact_models(mbs)
             refuse_sliding_joints(mbs)
         elif _contact.count(mbs):
             self.switch_mode = _contact.ContactModes(self)
+
+    def _circles_switched(self, d0, d1):
+        """True when a circle of an ObjectContactCurveCircles touched its curve in the data d0
+        and not in d1, or the reverse (:func:`curve_circle_rows`); checked only when
+        ``locate_circle_contacts``."""
+        if not (self.locate_circle_contacts and self._circle_rows):
+            return False
+        return circles_touching(d0, self._circle_rows) != circles_touching(d1, self._circle_rows)
 
     def _take_residual_user_function(self):
         """The system's PreNewtonResidualUserFunction (``mbs.SetPreNewtonResidualUserFunction``),
@@ -219,9 +229,22 @@ def has_prestep(mbs):
         return False
 
 
-#: contact objects with the data coordinate that holds their gap (Exudyn's documentation
-#: and PostNewton of each)
-GAP_OBJECTS = {"ContactSphereSphere": 0, "ConnectorRollingDiscPenalty": 2}
+#: contact objects with the data coordinates that hold their gaps, as offsets among the n data
+#: coordinates of the object's node (Exudyn's documentation and PostNewton of each). Their
+#: forces act while the gap stored by the last PostNewton is closed, so a closing or opening
+#: not located would switch the force on or off only at the end of the step it falls in
+#: (ObjectContactConvexRoll and ObjectContactCoordinate: 0.4 % off at any tolerance, the
+#: error of a contact onset late by up to Exudyn's step)
+GAP_OBJECTS = {
+    "ContactSphereSphere": lambda o, n: [0],
+    "ContactSphereTorus": lambda o, n: [0],
+    "ContactConvexRoll": lambda o, n: [0],
+    "ContactCoordinate": lambda o, n: [0],
+    "ConnectorRollingDiscPenalty": lambda o, n: [2],
+    # one gap per contact segment, first (then the friction states)
+    "ContactCircleCable2D": lambda o, n: range(min(n, int(o.get("numberOfContactSegments", n)))),
+    "ContactFrictionCircleCable2D": lambda o, n: range(min(n, int(o.get("numberOfContactSegments", n // 3)))),
+}
 #: objects whose force reads a velocity their PostNewton stored at the last step's end
 LAGGED_OBJECTS = {"ConnectorRollingDiscPenalty": "its friction force acts along the slip velocity stored at the "
                                                  "last step's end (data coordinates 0, 1)"}
@@ -242,10 +265,42 @@ def gap_rows(mbs):
     for k, kind, o in objects(mbs):
         if kind in GAP_OBJECTS and "nodeNumber" in o:
             try:
-                rows.append(int(sd.GetNodeLTGData(int(o["nodeNumber"]))[GAP_OBJECTS[kind]]))
-            except Exception:
-                pass
+                ltg = list(sd.GetNodeLTGData(int(o["nodeNumber"])))
+            except Exception:           # no data node (an invalid nodeNumber)
+                continue
+            rows += [int(ltg[i]) for i in GAP_OBJECTS[kind](o, len(ltg)) if 0 <= i < len(ltg)]
     return np.array(rows, int)
+
+
+def curve_circle_rows(mbs):
+    """(object index, rows of the circle numbers, rows of the gaps) among the system's data
+    coordinates, for each ObjectContactCurveCircles: per curve segment [circle number, gap,
+    tangential velocity], the circle nearest to the segment and its gap. A circle touches
+    the curve while the gap of a segment it is nearest to is negative; a circle rolling from
+    one segment to the next changes the segments' gaps, but not that it touches. So the
+    switches located are a circle touching down or lifting off (a chain's rollers on a
+    sprocket; locating every segment's gap made Exudyn's contactCurveExample.py take over
+    60 s), and only by the error-controlled methods: at Exudyn's fixed steps genalpha takes
+    them at the step's end with a redo, as Exudyn does (each cut there costs a new iteration
+    matrix: contactCurveExample.py over 60 s, 3.3 s without). Not located, dopri5 followed
+    Exudyn's coarse steps: a chain drive's driven sprocket 5.7991e-6 rad at 0.03 s, Exudyn
+    refined 10x and 30x 5.8791e-6 and 5.8751e-6 (located: 5.8799e-6)."""
+    sd, out = mbs.systemData, []
+    for k, kind, o in objects(mbs):
+        if kind == "ContactCurveCircles" and "nodeNumber" in o:
+            try:
+                ltg = np.array(sd.GetNodeLTGData(int(o["nodeNumber"])), int)
+            except Exception:           # no data node (an invalid nodeNumber)
+                continue
+            n = 3 * (len(ltg) // 3)
+            out.append((k, ltg[0:n:3], ltg[1:n:3]))
+    return out
+
+
+def circles_touching(d, rows):
+    """The set of (object, circle) pairs that touch their curve in the data coordinates d
+    (``rows``: :func:`curve_circle_rows`); circle number -1 is no circle."""
+    return {(k, int(c)) for k, circle, gap in rows for c, g in zip(d[circle], d[gap]) if c >= 0 and g < 0.0}
 
 
 def note_lagged_objects(mbs):

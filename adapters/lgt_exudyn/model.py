@@ -166,13 +166,14 @@ class ExudynModel(StepHooks, Model):
         moved by more than timeIntegration.discontinuous.iterationTolerance, else False."""
         self.write_back(q, V, t)
         gaps, modes = self._gap_rows, self._mode_rows
-        d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) else None
+        d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) or self._circle_rows else None
         moved = float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol
         # a contact gap that changes sign (the contact closing or opening), or a mode whose sign
         # changes (a limit stop reached or left, stick <-> slip), is a switch to locate however
         # small the force error; a force error alone redoes the step, as Exudyn iterates
         d1 = None if d0 is None else np.array(self.sd.GetDataCoordinates())
-        if d1 is not None and (np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes]))):
+        if d1 is not None and (np.any(d0[gaps] * d1[gaps] < 0.0) or np.any(np.sign(d0[modes]) != np.sign(d1[modes]))
+                               or self._circles_switched(d0, d1)):
             return True
         return REDO if moved else False
 
@@ -459,11 +460,19 @@ class ExudynModel(StepHooks, Model):
         A = self._jacobian2(q2) if self.n_constraints else None
         d = mass_defects(M, A) or (mass_defects(M) if A is not None else [])   # M̄⁻¹ is formed
         if d:
-            raise InputError(mass_message(d, [self.nodes.owner(self.mbs, i) for i, _ in d])
-                             + " Exudyn's implicit solvers (generalized-α) can run such a model, since "
-                             "their iteration matrix includes the stiffness; run it with Exudyn's own "
-                             "exu.SolveDynamic, or give these coordinates mass (an ANCF beam's "
-                             "sectionData.inertia: no zero entry).")
+            owners = [self.nodes.owner(self.mbs, i) for i, _ in d]
+            if any("ObjectANCFBeam " in o for o in owners):
+                # its cross-section slopes: rank 3 of 6 in M, whatever sectionData.inertia
+                fix = (" Exudyn's ObjectANCFBeam has such a mass matrix whatever its sectionData: three "
+                       "directions of the slope coordinates of each node carry no inertia. Run it with "
+                       "Exudyn's own exu.SolveDynamic (generalized-α: its iteration matrix includes the "
+                       "stiffness), or use ObjectBeamGeometricallyExact.")
+            else:
+                fix = (" Exudyn's implicit solvers (generalized-α) can run such a model, since their "
+                       "iteration matrix includes the stiffness; run it with Exudyn's own "
+                       "exu.SolveDynamic, or give these coordinates mass (an ANCF cable's or beam's "
+                       "inertia: no zero entry).")
+            raise InputError(mass_message(d, owners) + fix)
 
     # ------------------------------------------------------------------ compiled backend
     def reset_caches(self):

@@ -213,6 +213,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     # limit that needs far more stops early, saying so (lgt_bridge.diagnosis.unaffordable)
     sim.run_end = t1
     sim.reference_steps = (n, t0, t1, f"Exudyn's own solver (numberOfSteps = {n})")
+    if hasattr(model, "locate_circle_contacts"):
+        model.locate_circle_contacts = controlled   # (hooks.curve_circle_rows)
     if not controlled:
         sim.min_step = 0.0
     else:
@@ -395,6 +397,11 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     mbs.sys["lgtBridgeStats"] = st
     if storeSolver:
         mbs.sys["dynamicSolver"] = solver
+        # its step counters count the bridge's steps, as Exudyn's own adaptive solvers count
+        # theirs (currentStepIndex - 1: steps taken; Exudyn's explicitLieGroupIntegratorTest.py
+        # reads it): Exudyn's loop here only stepped from output to output
+        solver.it.currentStepIndex = sim.n_steps + 1
+        solver.it.rejectedAutomaticStepSizeSteps = stepper.n_rejected
     if verbose or (verbose is None and ti.verboseMode > 0):
         print(f"lgt-bridge: SolveDynamic {describe(st)}: {sim.n_steps} steps, {stepper.prob.n_f} "
               f"f evaluations, {st['wall_s']:.3f} s")

@@ -8,7 +8,7 @@ import pytest
 
 from lgt_bridge import scenes, simulate
 from lgt_bridge.errors import InputError
-from lgt_bridge.validation import mass_defects
+from lgt_bridge.validation import mass_defects, mass_message
 
 I3 = np.diag([1.0, 2.0, 3.0])
 
@@ -28,6 +28,17 @@ def test_zero_inertia_body_is_rejected_before_the_first_step(inertia2, kind):
     with pytest.raises(InputError, match=rf"mass matrix at q0 is {kind}.*body 1 \(flap\)") as exc:
         simulate(model, (0, 1), method="dopri5")
     assert "positive principal inertias" in str(exc.value)
+
+
+def test_a_rounding_level_negative_eigenvalue_is_no_inertia_not_negative_inertia():
+    """A rank-deficient M whose zero eigenvalue comes out at -1e-15 (Exudyn's ObjectANCFBeam):
+    singular, "no inertia"; a clearly negative one stays indefinite."""
+    for lam, kind in [(-1e-15, "singular"), (-1e-3, "indefinite")]:
+        M = np.eye(3)
+        M[0, 0] = lam
+        msg = mass_message(mass_defects(M), ["coordinate 0 of node 0"] * 3)
+        assert msg.startswith(f"mass matrix at q0 is {kind}")
+        assert ("negative inertia" in msg) == (kind == "indefinite")
 
 
 def test_valid_scenes_pass_the_mass_check():

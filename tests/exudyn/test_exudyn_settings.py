@@ -449,3 +449,23 @@ def test_genalpha_takes_the_settings_newmark_method():
     s.timeIntegration.generalizedAlpha.newmarkBeta = 0.1
     with pytest.raises(InputError, match="Newmark"):
         SolveDynamic(mbs, s, method="genalpha")
+
+
+def test_the_stored_solver_counts_the_bridges_steps_as_exudyns_dopri5_counts_its_own():
+    """mbs.sys['dynamicSolver'].it.currentStepIndex - 1 is the number of steps taken, as Exudyn's
+    own DOPRI5 counts its adaptive steps there (Exudyn's explicitLieGroupIntegratorTest.py
+    reads it; here Exudyn's own run takes more steps than numberOfSteps, so the counter is not
+    numberOfSteps). The bridge's stored solver said numberOfSteps (2000 for 9014 steps taken)."""
+    n = 20
+    SC, mbs = point_mass()
+    s = em.settings(1.0, n)
+    s.timeIntegration.absoluteTolerance = s.timeIntegration.relativeTolerance = 1e-10
+    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.DOPRI5, showHints=False)
+    own = mbs.sys["dynamicSolver"].it.currentStepIndex - 1
+    assert own > n                                  # Exudyn's counter: its own adaptive steps
+    SC, mbs = point_mass()
+    SolveDynamic(mbs, s, method="dopri5")
+    st = mbs.sys["lgtBridgeStats"]
+    assert st["n_steps"] > n
+    assert mbs.sys["dynamicSolver"].it.currentStepIndex - 1 == st["n_steps"]
+    assert mbs.sys["dynamicSolver"].it.rejectedAutomaticStepSizeSteps == st["n_rejected"]

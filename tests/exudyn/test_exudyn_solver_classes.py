@@ -53,6 +53,20 @@ def test_ancf_beam_without_torsional_inertia_is_refused_before_the_first_step(me
     assert "exu.SolveDynamic" in msg
 
 
+def test_ancf_beam_with_every_inertia_is_refused_as_singular_whatever_its_section():
+    """Exudyn's ObjectANCFBeam has a mass matrix singular in three directions per node with
+    any sectionData.inertia (here diag(2ρI, ρI, ρI)); the refusal called it "indefinite" with
+    "negative inertia (scaled eigenvalue -1.1e-15)" (rounding) and advised an inertia without
+    zero entries, which this beam has. It now says singular and that no inertia helps."""
+    mbs, s = sm.ancf_beam_zero_torsion_inertia(torsion_inertia=2 * sm._section()[1])
+    with pytest.raises(InputError) as exc:
+        SolveDynamic(mbs, s, method="dopri5")
+    msg = str(exc.value)
+    assert "mass matrix at q0 is singular" in msg and "negative" not in msg
+    assert "ObjectANCFBeam has such a mass matrix whatever its sectionData" in msg
+    assert "exu.SolveDynamic" in msg
+
+
 def test_pack_falls_back_to_the_whole_matrix_when_a_block_has_no_inverse():
     """A constant M̄ whose diagonal block is not positive definite is not inverted block by
     block (which raised LinAlgError): the pack factorizes the whole matrix at each f instead."""

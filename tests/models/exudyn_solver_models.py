@@ -63,18 +63,18 @@ def ancf_cable_damped(elements=4, load=(0.0, -5.0, 0.0)):
     return mbs, settings(0.1, 25), nodes[-1]
 
 
-def ancf_beam_zero_torsion_inertia(elements=4):
+def ancf_beam_zero_torsion_inertia(elements=4, torsion_inertia=0.0):
     """The ANCF beam half of the same test: ObjectANCFBeam on NodePointSlope23 with
-    sectionData.inertia = diag(0, ρI, ρI) (no torsional inertia) and a damping matrix,
-    clamped by a generic joint: its mass matrix is singular (the slopes' axial components
-    carry no mass)."""
+    sectionData.inertia = diag(torsion_inertia, ρI, ρI) (by default no torsional inertia) and
+    a damping matrix, clamped by a generic joint: its mass matrix is singular (three
+    directions of each node's slopes carry no mass, with any torsion_inertia)."""
     mbs = _system()
     rhoA, rhoI, EA, EI = _section()
     c = _CABLE
     ground = mbs.CreateGround(referencePosition=[0, 0, 0])
     sec = exu.BeamSection()
     sec.stiffnessMatrix = np.diag([EA, EA, EA, EA, EI, EI])
-    sec.inertia = np.diag([0, rhoI, rhoI])
+    sec.inertia = np.diag([torsion_inertia, rhoI, rhoI])
     sec.massPerLength = rhoA
     sec.dampingMatrix = np.diag([EA * c["betaAxial"], 0, 0, 0, EI * c["beta"], EI * c["beta"]])
     le = c["l"] / elements
