@@ -204,10 +204,14 @@ def unaffordable(sim):
     if singular_configuration(sim) is not None:
         return None     # short steps from a singular configuration: the min_step check says so
     limit = stability_limit(sim, h_now) if (explicit and not jumps) else None
+    name = (ref[3] if len(ref) > 3 else "the engine's own steps") if ref is not None else None
     if ref_rest is not None and limit is None:
-        return None     # held by accuracy: the run is the caller's to afford (max_steps)
+        # held by accuracy: the run is the caller's to afford (max_steps); said once
+        if explicit and not getattr(sim, "_slow_noted", False):
+            sim._slow_noted = True
+            _warn_slow(sim, need, ref_rest, name, wall_rest, h_now)
+        return None
     if ref_rest is not None:
-        name = ref[3] if len(ref) > 3 else "the engine's own steps"
         head = (f"{sim.method} stopped at t = {sim.t:.9g}: the rest of the run, to {end:.9g}, would need about "
                 f"{need:d} more steps (its step has been steady at h ≈ {h_now:.3g} s over the last "
                 f"{sim.n_steps - n0} steps), {need / ref_rest:.0f} times the {ref_rest:.0f} steps of {name} "
@@ -234,6 +238,21 @@ def unaffordable(sim):
     else:
         why = " Loosen the tolerances, or raise max_steps."
     return head + why
+
+
+def _warn_slow(sim, need, ref_rest, name, wall_rest, h_now):
+    """A ModelNote that an explicit run held by its accuracy (not its stability limit) will
+    take far longer than the engine's own run: it goes on, and the note says what to do."""
+    import warnings
+    from .errors import ModelNote
+    tol = f" at rtol={sim.rtol:g}" if getattr(sim, "rtol", None) else ""
+    warnings.warn(ModelNote(
+        f"{sim.method}{tol} at t = {sim.t:.9g}: the rest of the run needs about {need:d} more steps "
+        f"(h ≈ {h_now:.3g} s), {need / ref_rest:.0f} times the {ref_rest:.0f} steps of {name} for it, about "
+        f"{_duration(wall_rest)} at the pace so far. Its steps are held by its accuracy (a fast oscillation "
+        "the error control resolves: a stiff spring, a flexible body's axial or shear mode), not by its "
+        "stability limit, so it goes on. To trade that accuracy for time, use method='genalpha' (the "
+        "script's own steps, damping such modes) or loosen the tolerances."), stacklevel=2)
 
 
 def step_too_small(sim, underflow=False):

@@ -112,3 +112,27 @@ def test_a_stiff_run_the_caller_affords_runs_through():
     SolveDynamic(mbs, s, method="dopri5")
     st = mbs.sys["lgtBridgeStats"]
     assert st["success"] and st["stiff"]["h_stable"] * 3e5 < 3.3
+
+
+def test_an_accuracy_held_explicit_run_goes_on_and_says_how_long(monkeypatch):
+    """A lightly damped chain (k = 1e5 N/m, ω up to about 600 rad/s) over 2 s with
+    numberOfSteps = 2, dopri5 at rtol = atol = 1e-10: its steps are held by the accuracy
+    (h|λ| well inside the stability region), not by the stability limit, so the run goes on to
+    the end; past STIFF_RATIO times Exudyn's steps (and, here, any wall time) it warns once
+    with the steps the rest needs and what to use instead. Without the wall floor lowered the
+    same run says nothing (a second or less: nothing to warn about)."""
+    import warnings
+    from lgt_bridge import diagnosis
+    from lgt_bridge.errors import ModelNote
+    for wall, warned in ((0.0, True), (diagnosis.STIFF_WALL, False)):
+        monkeypatch.setattr(diagnosis, "STIFF_WALL", wall)
+        mbs, s = sm.stiff_spring_chain(k=1e5, damping=0.1, t_end=2.0, steps=2, hanging=True)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            SolveDynamic(mbs, s, method="dopri5", rtol=1e-10, atol=1e-10)
+        st = mbs.sys["lgtBridgeStats"]
+        notes = [str(w.message) for w in caught if issubclass(w.category, ModelNote) and "held by its accuracy" in str(w.message)]
+        assert st["success"] and st["n_steps"] > 20 * 2, st
+        assert len(notes) == (1 if warned else 0), notes
+        if warned:
+            assert "times the" in notes[0] and "method='genalpha'" in notes[0]
