@@ -429,8 +429,9 @@ class GenAlpha(Stepper):
         """Modified Newton (:mod:`.newton_control`): the iteration matrix is kept across
         steps while the updates contract fast enough to converge within BUDGET updates, and
         refreshed at the current iterate otherwise (the body-frame unknowns of SE(3) make it
-        rotate with fast-spinning bodies); a step whose kept matrix fails is retried once
-        from the predictor on a fresh matrix before it counts as failed."""
+        rotate with fast-spinning bodies); a step begun on a kept matrix that fails (even if
+        refreshed on the way, at an iterate the stale one sent away) is retried once from the
+        predictor on a matrix taken there before it counts as failed."""
         if self.Wd is None:
             self.start(t)
         self._consts = None
@@ -445,9 +446,8 @@ class GenAlpha(Stepper):
         if not kept:
             self._jacobian(Wd1, lam, t1, h)
         tol, floor = tolerances(self.W, self.q, self.tol, h, self.beta, self.nc > 0)
-        n_jac = self.n_jacobians
         out = self._newton(Wd1, lam, t1, h, tol, floor)
-        if out is None and kept and self.n_jacobians == n_jac:
+        if out is None and kept:
             self._jacobian(Wd1, lam, t1, h)
             out = self._newton(Wd1, lam, t1, h, tol, floor)
         if out is None:
