@@ -436,7 +436,7 @@ class GenAlpha(Stepper):
             self.start(t)
         self._consts = None
         t1 = t + h
-        # predictor: linear extrapolation of the accelerations of the last two steps
+        # predictor: the accelerations of the last two steps extrapolated (_predict)
         if self._prev is not None and _same(self._prev[0], h):
             Wd1 = _predict(self.Wd, self._prev[1])
             lam = _predict(self.lam, self._prev[2])
