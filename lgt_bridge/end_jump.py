@@ -9,10 +9,10 @@ step to the double just below t_end, where every stage is on the near side of th
 and ends at t_end with that state: the left limit, which is what a run of the model up to
 t_end means. The state moves by |V| times one rounding unit of t over that last gap.
 
-:func:`finish_left_of_jump` is called (by :func:`collapsed`) when the steps collapse below ``min_step`` within
-the last millionth of the run (:func:`.diagnosis.jump_at_end` says whether f jumps there);
-``Simulation.end_jump`` then holds the size of the jump it stepped around, and the
-result's ``stats["end_jump"]`` reports it.
+:func:`finish_left_of_jump` is called (by :func:`collapsed`) when the steps collapse below
+``min_step`` within the last millionth of the run (:func:`.diagnosis.jump_size_at_end` says
+whether f jumps there); ``Simulation.end_jump`` then holds the size of the jump it stepped
+around, and the result's ``stats["end_jump"]`` reports it.
 """
 import numpy as np
 

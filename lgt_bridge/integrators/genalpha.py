@@ -474,11 +474,11 @@ class GenAlpha(Stepper):
 def _predict(x, x_prev):
     """Newton's starting value of a step's unknowns from the last two steps' values: their
     linear extrapolation, but 0 (Arnold and Brüls' start, and Exudyn's) where the last two
-    alternate in sign, as the accelerations of a mode
-    too fast for the step do under the numerical damping (a stiff spring at Exudyn's step),
-    and extrapolating doubles the swing. A start that far off led Newton to another root of
-    the step's equations: a stiff damped chain hung at h = 0.2 s turned through its anchor,
-    ending 2 cm above the equilibrium (Exudyn's own start stays on the right root)."""
+    alternate in sign, as the accelerations of a mode too fast for the step do under the
+    numerical damping (a stiff spring at Exudyn's step), and extrapolating doubles the swing.
+    A start that far off led Newton to another root of the step's equations: a stiff damped
+    chain hung at h = 0.2 s turned through its anchor, ending 2 cm above the equilibrium
+    (Exudyn's own start stays on the right root)."""
     out = 2.0 * x - x_prev
     if len(x):
         # alternating: opposite signs, neither near zero against the vector's size (a value
