@@ -19,13 +19,7 @@ from exudyn.utilities import (InertiaCylinder, MarkerBodyRigid, MarkerNodeCoordi
                               ObjectGround, RotationMatrixY)
 
 
-def _settings(t_end, n):
-    s = exu.SimulationSettings()
-    s.timeIntegration.numberOfSteps = n
-    s.timeIntegration.endTime = t_end
-    s.timeIntegration.verboseMode = 0
-    s.solution.file.write = False
-    return s
+from exudyn_special_models import settings as _settings  # noqa: E402  (the shared settings)
 
 
 def mass_on_coordinate_contact(t_end=0.2, n=100):
