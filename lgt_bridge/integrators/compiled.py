@@ -12,6 +12,7 @@ import numpy as np
 from ..kernels import entry_point
 from ..kernels import genalpha as _ga
 from ..kernels import stage as _k
+from ..kernels import steps as _steps
 from ..kernels.rotations import PARAM_CODES
 from .base import NULL_CONTEXT
 from .local import LocalProblem
@@ -192,6 +193,15 @@ class CompiledProblem(LocalProblem):
         out[:self.nX] = self._xd
         _k.convert(2, Vd, self._W, self._p, self.bt, out[self.nX:])
         return out
+
+    def initial_step(self, fX, fW, W, t, rtol, atol, order):
+        """:func:`.control.initial_step` from f0 = (fX, fW) at X = 0 (the first stage's), its
+        arithmetic in two kernel calls around the one f it needs."""
+        nX = self.nX
+        Y = np.empty(nX + len(fW))
+        h0 = _steps.h0_start(fX, fW, W, float(rtol), float(atol), Y)
+        f1 = self.rates(Y[:nX], Y[nX:], t + h0)
+        return _steps.h0_end(f1, fX, fW, W, float(rtol), float(atol), h0, float(order))
 
     # --- generalized-α ---------------------------------------------------------------
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):

@@ -141,21 +141,22 @@ class Loop:
         """C into the simulation and stepper (the last accepted step's end as their state,
         its dense output when the work array still holds its start)."""
         st, C = sim.stepper, self.C
+        c = C.tolist()                     # (Python floats: one conversion, not one per slot)
         prob, ctl = st.prob, st.control
-        sim.t, sim.h, sim.n_steps = C[_s.T], C[_s.H], int(C[_s.NSTEPS])
-        st.n_rejected += int(C[_s.NREJ])
-        prob.n_f += int(C[_s.NF])
+        sim.t, sim.h, sim.n_steps = c[_s.T], c[_s.H], int(c[_s.NSTEPS])
+        st.n_rejected += int(c[_s.NREJ])
+        prob.n_f += int(c[_s.NF])
         C[_s.NREJ] = C[_s.NF] = 0.0
-        st._fsal = bool(C[_s.FSAL])
-        cur = int(C[_s.CUR])
+        st._fsal = bool(c[_s.FSAL])
+        cur = int(c[_s.CUR])
         st.KX, st.KW = st._bufs[cur]
-        st._hcay, st.h_stable, st._rho = C[_s.HCAY], C[_s.HSTABLE], C[_s.RHO]
-        st._n_stiff, st._n_nonstiff = int(C[_s.NSTIFF]), int(C[_s.NNONSTIFF])
-        st.stiff = None if np.isnan(C[_s.STIFF_T]) else (C[_s.STIFF_T], C[_s.STIFF_H], C[_s.STIFF_RHO])
-        ctl._err_prev, ctl._cap = C[_s.ERRPREV], C[_s.CAP]
+        st._hcay, st.h_stable, st._rho = c[_s.HCAY], c[_s.HSTABLE], c[_s.RHO]
+        st._n_stiff, st._n_nonstiff = int(c[_s.NSTIFF]), int(c[_s.NNONSTIFF])
+        st.stiff = None if c[_s.STIFF_T] != c[_s.STIFF_T] else (c[_s.STIFF_T], c[_s.STIFF_H], c[_s.STIFF_RHO])
+        ctl._err_prev, ctl._cap = c[_s.ERRPREV], c[_s.CAP]
         prob._vd = _NONE
         prob._W0_src = None
-        if not C[_s.ACC]:
+        if not c[_s.ACC]:
             return
         C[_s.ACC] = 0.0
         nX, nv, n_end = prob.nX, prob.nv, self.n_end
@@ -164,9 +165,9 @@ class Loop:
         quats = y[n_end:].reshape(-1, 4)
         st._last_KW = st._bufs[1 - cur][1]
         st._dense = None
-        if C[_s.ROLL]:              # the accepted step's start is still the problem's base
+        if c[_s.ROLL]:              # the accepted step's start is still the problem's base
             base = (prob._qk.copy(), prob._pk.copy())
-            st._dense_args = (C[_s.TPREV], C[_s.HPREV], X1, W1, *st._bufs[1 - cur], prob._W0.copy(), base)
+            st._dense_args = (c[_s.TPREV], c[_s.HPREV], X1, W1, *st._bufs[1 - cur], prob._W0.copy(), base)
         else:
             st._dense_args = None
         st.q, st.V, st.W = q1, V1, W1

@@ -274,8 +274,10 @@ class AdaptiveRK(ExplicitRK):
         except StepFailed:            # not finite at the start: the first step reports it
             f0 = None
         else:
-            f0 = np.concatenate([KX[0], KW[0]])
             self._fsal = True
+            if prob.compiled:         # the rule's arithmetic in kernels
+                return prob.initial_step(KX[0], KW[0], self.W, t, self.rtol, self.atol, self.tab.err_order)
+            f0 = np.concatenate([KX[0], KW[0]])
         return initial_step(prob.rates, prob.nX, self.W, t, self.rtol, self.atol, self.tab.err_order, f0=f0)
 
     def error_norm(self, h, s5, s3):

@@ -72,6 +72,31 @@ def test_the_first_step_reuses_the_starting_steps_f():
     assert r2.stats["n_f"] == 15 and np.array_equal(r2.q, r.q) and np.array_equal(r2.V, r.V)
 
 
+@pytest.mark.parametrize("case", ["top", "top rtol=0", "free body at rest", "chain"])
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_the_compiled_starting_step_is_the_reference_rule(case, method):
+    """On compiled kernels the starting step's arithmetic runs in two kernel calls
+    (kernels.steps.h0_start/h0_end); it is the reference rule (control.initial_step) on the
+    same f0 and the same f, every branch: steps from d0/d1, a state at rest (d0 = 0: 1e-6),
+    rtol = 0, and an f that vanishes (max(1e-6, 1e-3 h0))."""
+    from lgt_bridge.integrators.control import initial_step
+    rtol, atol, V0 = 1e-7, 1e-9, None
+    model = {"top": scenes.heavy_top(), "top rtol=0": scenes.heavy_top(), "chain": scenes.chain(3),
+             "free body at rest": scenes.free_body()}[case]
+    if case == "top rtol=0":
+        rtol = 0.0
+    if case == "free body at rest":
+        V0 = np.zeros(model.layout.nv)
+    sim = Simulation(model, method=method, rtol=rtol, atol=atol, t_end=1.0, V0=V0)
+    st = sim.stepper
+    assert st.prob.compiled and st._fsal       # the first stage holds f0
+    f0 = np.concatenate([st.KX[0], st.KW[0]])
+    ref = initial_step(st.prob.rates, st.prob.nX, st.W, 0.0, rtol, atol, st.tab.err_order, f0=f0)
+    assert sim.h == pytest.approx(ref, rel=1e-12, abs=0.0)
+    if case == "free body at rest":
+        assert not np.any(f0)                  # (the branch where both estimates vanish)
+
+
 def test_models_of_equal_layouts_share_their_analysis_and_a_new_layout_gets_its_own():
     from lgt_bridge.integrators.problem import make_problem
     a, b = make_problem(scenes.free_body(), "SO3xR3"), make_problem(scenes.free_body(), "SO3xR3")
