@@ -30,7 +30,7 @@ from lgt_bridge.model import EngineVelocity, Model, combine_iteration
 
 from .constraints import CLOSED_TOL, Constraints, gamma_fd, independent_rows, jacobian_fd
 from .iteration import iteration_parts
-from .memo import initial_state, lend_data, model_memo
+from .memo import give_back, initial_state, lend_data, model_memo
 from .loads import Loads
 from .rhs import compiled_f, f_numpy
 
@@ -189,6 +189,9 @@ class PinocchioModel(Model):
             if f_engine is not None:
                 self.engine_velocity = EngineVelocity(self.joints.root_bodies, f_engine)
         self.loads.check(self.q0, v0)          # a wrong tau or fext fails before any step
+
+    def __del__(self):
+        give_back(self)            # the lent pinocchio.Data, for the next model of this pinocchio.Model
 
     def _rank_constraints(self):
         """Set aside the constraint rows that are redundant at q0 (at its projection onto the

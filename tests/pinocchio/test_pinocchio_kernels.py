@@ -264,6 +264,21 @@ def test_a_model_and_its_run_are_freed_at_once():
         gc.enable()
 
 
+def test_a_freed_models_data_serves_the_next_model_and_live_models_never_share_one():
+    """Models wrapped afresh per call take a spare pinocchio.Data given back by a model freed
+    before; two live models of one pinocchio.Model never hold the same Data."""
+    model = free_body()
+    a, b = PinocchioModel(model), PinocchioModel(model)
+    assert a.data is not b.data
+    spare = a.data
+    del a
+    c, d = PinocchioModel(model), PinocchioModel(model)
+    assert c.data is spare and d.data is not spare and len({id(x.data) for x in (b, c, d)}) == 3
+    r1 = simulate(c, (0, 0.01), method="dop853", rtol=1e-9, atol=1e-9, t_eval=[0.01])
+    r2 = simulate(d, (0, 0.01), method="dop853", rtol=1e-9, atol=1e-9, t_eval=[0.01])
+    assert np.array_equal(r1.q, r2.q)
+
+
 @pytest.mark.parametrize("torques", [None, "pd"])
 def test_compiled_step_loop_takes_the_python_loops_steps(torques):
     """A free-flying humanoid (f in Pinocchio's own velocities, ABA per stage): the compiled
