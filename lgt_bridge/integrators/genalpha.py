@@ -46,7 +46,7 @@ from ..model import Model
 from .base import StepFailed, Stepper
 from .genalpha_matrix import (DENSE_MAX, SPARSE_MIN, DensePattern, Kinematics, accepts, coo, csr, factorize,
                               fd_matrix)
-from .genalpha_newton import iterate
+from .genalpha_newton import iterate, predict
 from .newton_control import tolerances
 
 
@@ -436,10 +436,10 @@ class GenAlpha(Stepper):
             self.start(t)
         self._consts = None
         t1 = t + h
-        # predictor: the accelerations of the last two steps extrapolated (_predict)
+        # predictor: the accelerations of the last two steps extrapolated (genalpha_newton.predict)
         if self._prev is not None and _same(self._prev[0], h):
-            Wd1 = _predict(self.Wd, self._prev[1])
-            lam = _predict(self.lam, self._prev[2])
+            Wd1 = predict(self.Wd, self._prev[1], self.prob.compiled)
+            lam = predict(self.lam, self._prev[2], self.prob.compiled)
         else:
             Wd1, lam = self.Wd.copy(), self.lam.copy()
         kept = self._solve is not None and _same(self._lu_h, h)
@@ -469,28 +469,6 @@ class GenAlpha(Stepper):
         """Newton's updates from (Ẇ, λ) on the stored matrix (:mod:`.genalpha_newton`): the
         converged (Ẇ_{k+1}, λ), or None (the reason in ``_why``)."""
         return iterate(self, Wd1, lam, t1, h, tol, floor)
-
-
-def _predict(x, x_prev):
-    """Newton's starting value of a step's unknowns from the last two steps' values: their
-    linear extrapolation, but 0 (Arnold and Brüls' start, and Exudyn's) where the last two
-    alternate in sign, as the accelerations of a mode too fast for the step do under the
-    numerical damping (a stiff spring at Exudyn's step), and extrapolating doubles the swing.
-    A start that far off led Newton to another root of the step's equations: a stiff damped
-    chain hung at h = 0.2 s turned through its anchor, ending 2 cm above the equilibrium
-    (Exudyn's own start stays on the right root)."""
-    out = 2.0 * x - x_prev
-    if len(x):
-        # alternating: opposite signs, neither near zero against the vector's size (a value
-        # crossing zero smoothly between two steps is extrapolated as any other)
-        big = _ALTERNATING * math.sqrt(x.dot(x) / len(x))
-        out[(x * x_prev < 0.0) & (np.abs(x) > big) & (np.abs(x_prev) > big)] = 0.0
-    return out
-
-
-#: the size, against the RMS of a step's unknowns, above which two of their values of
-#: opposite signs count as alternating (:func:`_predict`)
-_ALTERNATING = 0.1
 
 
 def _same(h0, h):

@@ -102,3 +102,18 @@ def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
             d2 += dz[i] * dz[i]
     ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
     return d2
+
+
+@njit("void(float64[::1], float64[::1], float64, float64[::1])", cache=True, error_model="numpy")
+def predict(x, x_prev, alternating, out):
+    """out = 2 x - x_prev, but 0 where x and x_prev have opposite signs and both exceed
+    ``alternating`` times x's RMS: generalized-α's Newton start (the numpy reference is
+    :func:`lgt_bridge.integrators.genalpha_newton.predict`)."""
+    n = x.shape[0]
+    s = 0.0
+    for i in range(n):
+        s += x[i] * x[i]
+    big = alternating * math.sqrt(s / n) if n else 0.0
+    for i in range(n):
+        a, b = x[i], x_prev[i]
+        out[i] = 0.0 if (a * b < 0.0 and abs(a) > big and abs(b) > big) else 2.0 * a - b

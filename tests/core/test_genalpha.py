@@ -401,3 +401,24 @@ def test_genalpha_gives_up_at_min_step_with_a_message_that_helps():
     assert not r.success
     assert "halving the step" in r.message and "min_step" in r.message
     assert r.t[-1] == pytest.approx(0.05, abs=1e-12)        # the steps before are kept
+
+
+def test_the_compiled_newton_start_is_the_reference_predictor():
+    """genalpha_newton.predict on compiled kernels (one call) equals its numpy reference
+    (linear extrapolation, 0 where the last two values alternate in sign above a tenth of the
+    RMS): vectors with alternating, small alternating, smoothly crossing and equal entries, and
+    one that is not C-contiguous (the reference then)."""
+    from lgt_bridge.integrators.genalpha_newton import predict
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 7, 104):
+        x, x_prev = rng.normal(size=n), rng.normal(size=n)
+        x[::3] = -x_prev[::3]                       # alternating
+        x[1::5] = 1e-3 * np.sign(x_prev[1::5])       # small, same sign
+        ref = predict(x, x_prev, compiled=False)
+        got = predict(x, x_prev, compiled=True)
+        assert np.array_equal(got, ref), n
+        alt = (x * x_prev < 0) & (np.abs(x) > 0.1 * np.sqrt(np.mean(x * x))) & (np.abs(x_prev) > 0.1 * np.sqrt(np.mean(x * x)))
+        assert np.all(ref[alt] == 0.0) and np.allclose(ref[~alt], 2 * x[~alt] - x_prev[~alt], rtol=0, atol=0)
+    y = rng.normal(size=(8, 2))
+    assert np.array_equal(predict(y[:, 0], y[:, 1], compiled=True), predict(y[:, 0].copy(), y[:, 1].copy()))
+    assert predict(np.zeros(0), np.zeros(0), compiled=True).shape == (0,)
