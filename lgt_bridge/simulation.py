@@ -382,10 +382,12 @@ class Simulation:
         st, first = self.stepper, targets[0]
         self._steps_until(first, on_step)
         t, tol = self.t, 1e-12 * max(1.0, abs(self.t))
-        dense = st.dense
         # (bisect: numpy's searchsorted costs more on the few targets a step covers)
-        n = 1 if dense is None else max(1, bisect_right(targets, t + tol))
-        k = 0 if dense is None else min(n, bisect_left(targets, t - tol))
+        n = max(1, bisect_right(targets, t + tol))
+        k = min(n, bisect_left(targets, t - tol))
+        dense = st.dense if k else None         # (made only for targets within the step)
+        if k and dense is None:
+            n, k = 1, 0
         Q, V = dense.many(targets[:k]) if k else (None, None)
         if k < n:                       # the step's own state for targets on its end
             if k == n - 1:
