@@ -85,6 +85,11 @@ def attempt_discontinuous(sim, h, post):
         st.restore(snap)
         sim.n_redone += 1
         accepted, h_new = st.attempt(t, h)
+        if not accepted:
+            # the redo with the new states was rejected by the error control: the retry, a
+            # shorter step from the same start, begins with the start's states (left at the
+            # end's, a spring switched on at a contact acted before the contact closed)
+            m.set_discontinuous_state(d0)
     return accepted, h_new
 
 
