@@ -222,7 +222,40 @@ def selected_matrix(model, q, V, t, c_acc, c_vel, c_pos, sparse):
 def newton_parts(model, q, V, t, sparse):
     """[M̄, C_t, K_t] of ``ExudynModel.iteration_matrix`` at (q, V, t) (``sparse``: scipy.sparse
     matrices): the coloured differences (:func:`sparse_parts`) on large compiled models, else
-    Exudyn's dense ODE2 Jacobians mapped by H (a 0/1 selection when there are no rotations)."""
+    Exudyn's dense ODE2 Jacobians mapped by H (a 0/1 selection when there are no rotations);
+    C_t's columns of Rxyz nodes' angular velocities by differences (:func:`rxyz_columns`)."""
+    parts = _jacobian_parts(model, q, V, t, sparse)
+    if "RigidBodyRxyz" in model.nodes.types:
+        parts[1] = rxyz_columns(model, q, V, t, parts[1])
+    return parts
+
+
+def rxyz_columns(model, q, V, t, C):
+    """C_t with its columns of the Rxyz nodes' angular velocities from central differences of
+    -Q̄(q, V, t): Exudyn's Jacobian does not see the adapter's Ḣ V term, whose dependence on
+    ω is largest there (θ̇ = G(θ)⁻¹ ω: C_t was 170 % off on a spring-loaded Rxyz body); three
+    pairs of force evaluations per Rxyz node. Exudyn is left at (q, V, t)."""
+    cols = model.nodes.types["RigidBodyRxyz"][1].ravel()
+    q, V = np.asarray(q, float), np.array(V, float)
+    F = np.empty((len(V), len(cols)))
+    for k, j in enumerate(cols):
+        v, e = V[j], 1e-6 * max(1.0, abs(V[j]))
+        V[j] = v + e
+        up = np.array(model.forces(q, V, t), float)
+        V[j] = v - e
+        F[:, k] = (np.asarray(model.forces(q, V, t), float) - up) / (2.0 * e)
+        V[j] = v
+    model.forces(q, V, t)
+    if not isinstance(C, np.ndarray):               # scipy.sparse
+        C = C.tolil()
+        C[:, cols] = F
+        return C.tocsr()
+    C = np.array(C)
+    C[:, cols] = F
+    return C
+
+
+def _jacobian_parts(model, q, V, t, sparse):
     if sparse and model._compiled:                  # large models: no dense Jacobian transfer
         parts = sparse_parts(model, q, V, t)
         if parts is not None:

@@ -104,10 +104,8 @@ class ExudynModel(StepHooks, Model):
         if sd.ODE1Size():
             self.ode1 = ODE1States(engine, self.layout, self.q0, self.V0)
             self.layout, self.q0, self.V0 = self.ode1.layout, self.ode1.q0, self.ode1.V0
-        if self.ode1 is not None or "RigidBodyRxyz" in nodes.types:
-            # ODE1 rows have no analytic Jacobian here; and Exudyn's ODE2 Jacobian does not see
-            # the adapter's Ḣ V term of Rxyz nodes (C_t was 170 % off on a spring-loaded Rxyz
-            # body): generalized-α differences the step instead
+        if self.ode1 is not None:
+            # ODE1 rows have no analytic Jacobian here: generalized-α differences the step
             self.iteration_matrix = None
 
     # ------------------------------------------------------------------ constraint rows
@@ -360,7 +358,7 @@ class ExudynModel(StepHooks, Model):
         geometric stiffness; measured against central differences of M̄ V̇ - Q̄ on a spring-loaded
         body (tests/test_exudyn_iteration.py): C_t to 3e-8, K_t to 0.1 % (RotVecLG) and 4 % (EP),
         so generalized-α's modified Newton still contracts (it refreshes the matrix when it does
-        not). Models with Rxyz nodes or ODE1 coordinates do not get it (see __init__). Kept
+        not). Rxyz nodes' ω columns of C_t by differences (K_t to 10 %). ODE1 models: none. Kept
         for the calls at the same (q, V, t); without rotations one Exudyn Jacobian for the
         combination (:func:`.iteration.selected_matrix`). ``sparse``: scipy.sparse (a sparse
         H), as generalized-α asks above its sparse size; large models with a constant M̄ take
