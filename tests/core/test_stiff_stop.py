@@ -107,3 +107,23 @@ def test_the_same_budget_leaves_a_run_it_affords_alone():
     r = simulate(body(1e6, 1e5), (0, 0.5), method="dopri5", group="SO3xR3", rtol=1e-6, atol=1e-8,
                  t_eval=[0.5])
     assert r.success and r.stats["n_steps"] > 10000
+
+
+def test_dominant_eigenvalues_of_a_state_of_mixed_scales():
+    """A pressure of 1e7 Pa beside an angle: the differences move each entry by 1e-6 of its
+    own size (one step for all, 1e-6 of the state's norm, moved the angle by 10 rad and gave
+    eigenvalues of ±1e8 1/s on Exudyn's hydraulic actuator). A pendulum (ω² = 400) driven by a
+    pressure that relaxes at 1200 1/s: the Jacobian's eigenvalues at the state, to 1e-4."""
+    from lgt_bridge.integrators.stability import dominant_eigenvalues
+    p0, w2, lam = 1e7, 400.0, 1200.0
+
+    class Problem:
+        nX = 1
+
+        def rates(self, X, W, t):
+            return np.array([W[0], -w2 * np.sin(X[0]) + 1e-7 * (W[1] - p0), -lam * (W[1] - p0) - 1e5 * W[0]])
+    W = np.array([0.3, p0 + 50.0])
+    J = np.array([[0.0, 1.0, 0.0], [-w2, 0.0, 1e-7], [0.0, -1e5, -lam]])       # at X = 0
+    ev = dominant_eigenvalues(Problem(), W, 0.0)
+    for r in np.linalg.eigvals(J):
+        assert np.min(np.abs(ev - r)) < 1e-4 * abs(r), (r, ev)
