@@ -129,6 +129,12 @@ STIFF_RATIO = 20
 #: ... and would take more than STIFF_WALL seconds at the pace of the last window (a short run
 #: at the stability limit just runs)
 STIFF_WALL = 10.0
+#: such a run needing more than NOTE_RATIO times the engine's steps (and STIFF_WALL s) goes on,
+#: with a note (an implicit method would take far less)
+NOTE_RATIO = 2
+#: checks of the stability limit for that note at most (a hydraulic cylinder's Jacobian by
+#: differences showed a spurious 1e8 1/s at one state; Hairer's test held at later ones)
+NOTE_TRIES = 10
 
 
 def budget_tick(sim):
@@ -164,7 +170,7 @@ def unaffordable(sim):
     - with ``reference_steps`` (the steps the caller's own engine takes for the run, as
       Exudyn's numberOfSteps): an explicit method held at its stability limit whose rest
       needs more than STIFF_RATIO times the engine's steps for it and more than STIFF_WALL
-      seconds at the pace so far.
+      seconds at the pace so far (more than NOTE_RATIO times: it goes on, with a ModelNote).
 
     Held at the stability limit: Hairer's stiffness test (the stepper's ``stiff``) or the
     model's own Jacobian (:func:`stability_limit`)."""
@@ -198,6 +204,8 @@ def unaffordable(sim):
         n_ref, r0, r1 = ref[:3]
         ref_rest = max(1.0, n_ref * (end - sim.t) / (r1 - r0))
         if not (need > STIFF_RATIO * ref_rest and wall_rest > STIFF_WALL):
+            if explicit and not jumps and need > NOTE_RATIO * ref_rest and wall_rest > STIFF_WALL:
+                _note_stiff(sim, need, ref_rest, ref, wall_rest, h_now)
             return None
     elif not over_max:
         return None
@@ -238,6 +246,27 @@ def unaffordable(sim):
     else:
         why = " Loosen the tolerances, or raise max_steps."
     return head + why
+
+
+def _note_stiff(sim, need, ref_rest, ref, wall_rest, h_now):
+    """Once a run: a ModelNote when an explicit method held at its stability limit runs on (its
+    rest needs fewer than STIFF_RATIO but more than NOTE_RATIO times the engine's steps and takes
+    over STIFF_WALL s): how long, the limit, and the implicit methods that would not be held."""
+    tries = getattr(sim, "_stiff_tries", 0)
+    if tries >= NOTE_TRIES:
+        return
+    sim._stiff_tries = tries + 1
+    limit = stability_limit(sim, h_now) if singular_configuration(sim) is None else None
+    if limit is None:         # (not established at this state: asked again at a later check)
+        return
+    sim._stiff_tries = NOTE_TRIES
+    import warnings
+    from .errors import ModelNote
+    name = ref[3] if len(ref) > 3 else "the engine's own steps"
+    warnings.warn(ModelNote(
+        f"{sim.method} at t = {sim.t:.9g}: the rest of the run needs about {need:d} more steps (h ≈ {h_now:.3g} s), "
+        f"{need / ref_rest:.0f} times the {ref_rest:.0f} steps of {name} for it, about {_duration(wall_rest)} at the "
+        f"pace so far; it goes on. {limit}"), stacklevel=2)
 
 
 def _warn_slow(sim, need, ref_rest, name, wall_rest, h_now):

@@ -126,6 +126,31 @@ def test_a_stiff_run_the_caller_affords_runs_through():
     assert st["success"] and st["stiff"]["h_stable"] * 3e5 < 3.3
 
 
+def test_a_stiff_run_a_few_times_the_engines_steps_goes_on_with_a_note(monkeypatch):
+    """The stiff chain over 0.05 s with numberOfSteps = 1100: about 5500 steps at dopri5's
+    stability limit, 5 times Exudyn's (below STIFF_RATIO): it runs to the end, and once the
+    rest would take over STIFF_WALL s (lowered here to 0) it says once that the steps sit at
+    the stability limit and which methods would not be held there (Exudyn's hydraulic
+    actuator script ran 38 s, 4x Exudyn's steps, without a word). Unlowered: no note."""
+    import warnings
+    from lgt_bridge import diagnosis
+    from lgt_bridge.errors import ModelNote
+    for wall, noted in ((0.0, True), (diagnosis.STIFF_WALL, False)):
+        monkeypatch.setattr(diagnosis, "STIFF_WALL", wall)
+        mbs, s = sm.stiff_spring_chain(damping=1e5, t_end=0.05, steps=1100)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            SolveDynamic(mbs, s, method="dopri5")
+        st = mbs.sys["lgtBridgeStats"]
+        notes = [str(w.message) for w in caught if issubclass(w.category, ModelNote) and "stability limit" in str(w.message)]
+        assert st["success"] and 2 * 1100 < st["n_steps"] < 20 * 1100, st
+        assert len(notes) == (1 if noted else 0), notes
+        if noted:
+            assert "it goes on" in notes[0] and "method='radau5' or method='genalpha'" in notes[0]
+            h = float(re.search(r"stability limit, h ≈ ([0-9.e+-]+) s", notes[0]).group(1))
+            assert abs(h - st["stiff"]["h_stable"]) < 0.1 * h
+
+
 def test_an_accuracy_held_explicit_run_goes_on_and_says_how_long(monkeypatch):
     """A lightly damped chain (k = 1e5 N/m, ω up to about 600 rad/s) over 2 s with
     numberOfSteps = 2, dopri5 at rtol = atol = 1e-10: its steps are held by the accuracy
