@@ -249,6 +249,8 @@ def factorize(J, L=None, compiled=False, memo=None):
             return solve
         L = sparse.csr_matrix(L)
         return lambda r: solve(L @ r)
+    if compiled:
+        return _dense_solver(J.toarray() if sparse.issparse(J) else J, L)
     import scipy.linalg as sla
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sla.LinAlgWarning)       # reported below
@@ -263,6 +265,27 @@ def factorize(J, L=None, compiled=False, memo=None):
     X = np.empty((J.shape[0], L.shape[1]))
     for j in range(L.shape[1]):
         X[:, j] = sla.lu_solve(lu, L[:, j], check_finite=False)
+    return X.dot
+
+
+def _dense_solver(J, L):
+    """The dense branch of :func:`factorize` in kernels (:func:`..kernels.linalg.dense_lu`): no
+    BLAS threads, no scipy call per column of L (15 lu_solve calls a matrix, 0.4 ms, were most of
+    a stiff 5-mass chain's run)."""
+    from ..kernels.linalg import dense_lu, dense_lu_solve
+    from scipy import sparse
+    A = np.array(J, dtype=float, order="C")
+    piv = np.empty(len(A), np.int64)
+    if dense_lu(A, piv):
+        raise np.linalg.LinAlgError("the matrix is exactly singular")
+    if L is None:
+        def solve(r):
+            x = np.array(r, dtype=float).reshape(len(A), -1)
+            dense_lu_solve(A, piv, x)
+            return x.reshape(np.shape(r))
+        return solve
+    X = np.array(L.toarray() if sparse.issparse(L) else L, dtype=float, order="C")
+    dense_lu_solve(A, piv, X)
     return X.dot
 
 
