@@ -30,7 +30,7 @@ def note_explicit_law(mbs, solver_type):
     ``solverType`` of its SolveDynamic call) on a system with a GeneralContact whose spheres
     are damped (or that holds ANCF cables, whose damping cannot be read): Exudyn's explicit
     solvers let a damped pair pull as it separates, the bridge (as Exudyn's implicit
-    solvers) releases it, so the motions differ (see the module docstring)."""
+    solvers) releases it, so the motions can differ (see the module docstring)."""
     name = str(solver_type).rsplit(".", 1)[-1] if solver_type is not None else ""
     if name not in EXPLICIT_SOLVERS:
         return
@@ -45,10 +45,10 @@ def note_explicit_law(mbs, solver_type):
                 f"GeneralContact {i} has damped contacts and the script asked Exudyn for solverType = {name}: "
                 "Exudyn's explicit solvers apply k·gap + d·ġ wherever a gap is closed, a pull too as a pair "
                 "separates; lgt_bridge follows Exudyn's implicit solvers, which release a pair whose force "
-                "turns to a pull (the active sets of Exudyn's PostNewton). The motions differ (Exudyn's "
-                "generalContactCylinderTest.py, a cylinder of 160 spheres rolling on triangles: 0.5 % at "
-                "2 s). For the explicit law run exu.SolveDynamic itself; for the bridge's, compare with "
-                "Exudyn's GeneralizedAlpha."), stacklevel=3)
+                "turns to a pull (the active sets of Exudyn's PostNewton). Where pairs separate while "
+                "damped the motions differ (Exudyn's generalContactCylinderTest.py, a cylinder of 160 "
+                "spheres rolling on triangles: 0.5 % at 2 s). For the explicit law run exu.SolveDynamic "
+                "itself; for the bridge's, compare with Exudyn's GeneralizedAlpha."), stacklevel=3)
             return
 
 
