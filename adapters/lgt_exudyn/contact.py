@@ -14,7 +14,42 @@ This is the law of Exudyn's implicit solvers; its explicit solvers keep no activ
 apply the force wherever a gap is closed (a pull too, as a pair separates): RK44 converges
 to another motion (a sphere of tests/models' general_contact_spheres ends 1.2e-3 lower).
 """
+import warnings
+
 import numpy as np
+
+from lgt_bridge.errors import ModelNote
+
+#: Exudyn's explicit DynamicSolverTypes: their GeneralContact law has no active sets
+EXPLICIT_SOLVERS = ("ExplicitEuler", "ExplicitMidpoint", "RK33", "RK44", "RK67", "ODE23", "DOPRI5",
+                    "VelocityVerlet")
+
+
+def note_explicit_law(mbs, solver_type):
+    """A ModelNote when the script asked Exudyn for an explicit solver (``solver_type``, the
+    ``solverType`` of its SolveDynamic call) on a system with a GeneralContact whose spheres
+    are damped (or that holds ANCF cables, whose damping cannot be read): Exudyn's explicit
+    solvers let a damped pair pull as it separates, the bridge (as Exudyn's implicit
+    solvers) releases it, so the motions can differ (see the module docstring)."""
+    name = str(solver_type).rsplit(".", 1)[-1] if solver_type is not None else ""
+    if name not in EXPLICIT_SOLVERS:
+        return
+    for i in range(count(mbs)):
+        gc = mbs.GetGeneralContact(i)
+        d = gc.GetPythonObject()
+        n_spheres, n_cables = int(d.get("numberOfSpheresMarkerBased", 0)), int(d.get("numberOfANCFCable2D", 0))
+        damped = sum(gc.GetSphereMarkerBased(j, addData=True).get("contactDamping", 0.0) > 0.0
+                     for j in range(n_spheres))
+        if damped or n_cables:
+            warnings.warn(ModelNote(
+                f"GeneralContact {i} has damped contacts and the script asked Exudyn for solverType = {name}: "
+                "Exudyn's explicit solvers apply k·gap + d·ġ wherever a gap is closed, a pull too as a pair "
+                "separates; lgt_bridge follows Exudyn's implicit solvers, which release a pair whose force "
+                "turns to a pull (the active sets of Exudyn's PostNewton). Where pairs separate while "
+                "damped the motions differ (Exudyn's generalContactCylinderTest.py, a cylinder of 160 "
+                "spheres rolling on triangles: 0.5 % at 2 s). For the explicit law run exu.SolveDynamic "
+                "itself; for the bridge's, compare with Exudyn's GeneralizedAlpha."), stacklevel=3)
+            return
 
 
 def count(mbs):

@@ -52,12 +52,13 @@ class StepHooks:
             self.switch_mode = _contact.ContactModes(self)
 
     def _circles_switched(self, d0, d1):
-        """True when a circle of an ObjectContactCurveCircles touched its curve in the data d0
+        """True when a segment of an ObjectContactCurveCircles pushed a circle in the data d0
         and not in d1, or the reverse (:func:`curve_circle_rows`); checked only when
         ``locate_circle_contacts``."""
         if not (self.locate_circle_contacts and self._circle_rows):
             return False
-        return circles_touching(d0, self._circle_rows) != circles_touching(d1, self._circle_rows)
+        return any(np.any(a != b) for a, b in zip(circles_pushed(d0, self._circle_rows),
+                                                   circles_pushed(d1, self._circle_rows)))
 
     def _take_residual_user_function(self):
         """The system's PreNewtonResidualUserFunction (``mbs.SetPreNewtonResidualUserFunction``),
@@ -275,16 +276,20 @@ def gap_rows(mbs):
 def curve_circle_rows(mbs):
     """(object index, rows of the circle numbers, rows of the gaps) among the system's data
     coordinates, for each ObjectContactCurveCircles: per curve segment [circle number, gap,
-    tangential velocity], the circle nearest to the segment and its gap. A circle touches
-    the curve while the gap of a segment it is nearest to is negative; a circle rolling from
-    one segment to the next changes the segments' gaps, but not that it touches. So the
-    switches located are a circle touching down or lifting off (a chain's rollers on a
-    sprocket; locating every segment's gap made Exudyn's contactCurveExample.py take over
-    60 s), and only by the error-controlled methods: at Exudyn's fixed steps genalpha takes
-    them at the step's end with a redo, as Exudyn does (each cut there costs a new iteration
-    matrix: contactCurveExample.py over 60 s, 3.3 s without). Not located, dopri5 followed
-    Exudyn's coarse steps: a chain drive's driven sprocket 5.7991e-6 rad at 0.03 s, Exudyn
-    refined 10x and 30x 5.8791e-6 and 5.8751e-6 (located: 5.8799e-6)."""
+    tangential velocity], the circle nearest to the segment and its gap. A segment pushes its
+    circle while its stored circle number is >= 0 and its stored gap negative (its PostNewton
+    stores them; the force is computed from the state but only for those segments). So a
+    switch is a pair (segment, circle) starting or ceasing to push: a circle touching down or
+    lifting off, and a circle sliding from one segment onto the next. Located only by the
+    error-controlled methods: at Exudyn's fixed steps genalpha takes them at the step's end
+    with a redo, as Exudyn does (each cut there costs a new iteration matrix:
+    contactCurveExample.py over 60 s, 3.3 s without). Not located, dopri5 followed Exudyn's
+    coarse steps: a chain drive's driven sprocket 5.7991e-6 rad at 0.03 s (Exudyn refined 10x
+    and 30x 5.8791e-6 and 5.8751e-6); a pin sliding down Exudyn's contactCurvePolynomial.py
+    arc of 127 segments kept the segment it left pushing and the next one idle until each
+    step's end: x = -2.886592 at 1 s, Exudyn refined 10x/100x -2.887466/-2.887464 (located:
+    -2.887469; contactCurveExample.py 0.30961359, Exudyn 100x 0.30961360, in 27 s instead of
+    8.5 s)."""
     sd, out = mbs.systemData, []
     for k, kind, o in objects(mbs):
         if kind == "ContactCurveCircles" and "nodeNumber" in o:
@@ -297,10 +302,11 @@ def curve_circle_rows(mbs):
     return out
 
 
-def circles_touching(d, rows):
-    """The set of (object, circle) pairs that touch their curve in the data coordinates d
-    (``rows``: :func:`curve_circle_rows`); circle number -1 is no circle."""
-    return {(k, int(c)) for k, circle, gap in rows for c, g in zip(d[circle], d[gap]) if c >= 0 and g < 0.0}
+def circles_pushed(d, rows):
+    """Per ObjectContactCurveCircles (``rows``: :func:`curve_circle_rows`), the circle each
+    segment pushes in the data coordinates d: its stored circle number where that is >= 0
+    and its stored gap < 0, else -1."""
+    return [np.where((d[circle] >= 0) & (d[gap] < 0.0), d[circle], -1.0) for k, circle, gap in rows]
 
 
 def note_lagged_objects(mbs):

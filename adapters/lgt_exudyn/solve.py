@@ -22,6 +22,7 @@ from lgt_bridge.progress import simulation_bar
 from lgt_bridge.simulation import Simulation
 from lgt_bridge.validation import check_inputs
 
+from .contact import note_explicit_law
 from .engine import engine_error
 from .hooks import general_contacts, refuse_sliding_joints
 from .model import ExudynModel
@@ -72,7 +73,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         - ``verboseMode`` > 0: print the one-line description (as ``verbose=True``).
           ``realtime.active``/``simulateInRealtime``: ignored (one note).
     solverType : ignored
-        ``method`` chooses the integrator.
+        ``method`` chooses the integrator (an explicit one with a damped GeneralContact: a
+        ModelNote, :func:`.contact.note_explicit_law`).
     updateInitialValues : bool, default False
         As Exudyn: the final state becomes the system's initial state.
     storeSolver : bool, default True
@@ -153,6 +155,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         mbs.Assemble()
     refuse_sliding_joints(mbs)          # before the constraint rows are classified (and noted)
     model = ExudynModel(mbs, simulationSettings)
+    note_explicit_law(mbs, solverType)
     ti = simulationSettings.timeIntegration
     t0, t1, n = float(ti.startTime), float(ti.endTime), int(ti.numberOfSteps)
     if n <= 0:

@@ -5,6 +5,8 @@ where they switch inside a step of a method with dense output and restarts there
 form of a point dropped on the floor through that contact (tests/models/contact_reference.py),
 scipy's DOP853 at 1e-13 on a column of spheres with every switch as an event, and Exudyn's own
 generalized-α refined."""
+import warnings
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,7 @@ exu = pytest.importorskip("exudyn")
 
 import lgt_bridge  # noqa: E402
 from lgt_bridge import StepError  # noqa: E402
+from lgt_bridge.errors import ModelNote  # noqa: E402
 from lgt_exudyn import SolveDynamic  # noqa: E402
 from lgt_exudyn.hooks import general_contacts  # noqa: E402
 from lgt_exudyn.model import ExudynModel  # noqa: E402
@@ -146,3 +149,30 @@ def test_general_contact_failure_names_it_in_one_line_and_keeps_the_steps():
     mbs, s = sm.general_contact_spheres()
     SolveDynamic(mbs, s, method="genalpha")
     assert np.abs(np.array(mbs.systemData.GetODE2Coordinates()) - exu_q).max() < 1e-6
+
+
+def test_an_explicit_solver_type_on_damped_general_contact_is_announced():
+    """Exudyn's explicit solvers keep no active sets: a damped pair pulls as it separates, so
+    Exudyn's own RK44 at 5e4 steps has the second sphere at rest on the floor at 0.5 s
+    (|ẏ| ≈ 1e-6 m/s), where the law of its implicit solvers, which the bridge follows, has it
+    bouncing (exact: ẏ = -0.228 m/s). A script asking for solverType=RK44 gets a ModelNote
+    saying so (Exudyn's generalContactCylinderTest.py, ExplicitEuler: 0.5 % apart at 2 s),
+    and the bridge's motion is still the exact one of its law; solverType=GeneralizedAlpha
+    gets no note."""
+    exact, _ = _floor_exact()
+    mbs, s = sm.general_contact_spheres()
+    s.timeIntegration.numberOfSteps = 50000
+    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.RK44)
+    sd = mbs.systemData
+    assert abs(sd.GetODE2Coordinates_t()[4] - exact[3]) > 0.2            # Exudyn's explicit law
+    mbs, s = sm.general_contact_spheres()
+    with pytest.warns(ModelNote, match="solverType = RK44"):
+        SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.RK44, method="dopri5", rtol=1e-10, atol=1e-10)
+    sd = mbs.systemData
+    q = np.array(sd.GetODE2Coordinates()) + np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
+    assert np.abs(_state(q, np.array(sd.GetODE2Coordinates_t())) - exact).max() < 1e-8
+    mbs, s = sm.general_contact_spheres()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha, method="dopri5")
+    assert not [w for w in caught if "GeneralContact" in str(w.message)]

@@ -8,7 +8,9 @@ simulationSettings, node)`` freshly assembled:
   (Exudyn's ConvexContactTest.py, without its spin and friction);
 - a disc (2-D rigid body) dropped onto a floor of eight segments through an
   ObjectContactCurveCircles, rolling over the segments' ends (Exudyn's chainDriveExample.py
-  and contactCurveExample.py: rollers on a sprocket's polygon).
+  and contactCurveExample.py: rollers on a sprocket's polygon);
+- a pin sliding down a bowl of segments through an ObjectContactCurveCircles, in contact all
+  along (Exudyn's contactCurvePolynomial.py).
 """
 import numpy as np
 
@@ -79,3 +81,27 @@ def disc_on_curve(t_end=0.3, n=300):
                                             contactStiffness=1e4, contactDamping=2))
     mbs.Assemble()
     return mbs, _settings(t_end, n), mbs.GetObject(disc)["nodeNumber"]
+
+
+def pin_in_polygon_bowl(t_end=0.3, n=300, segments=32):
+    """A pin of radius 2 cm (2-D rigid body, 1 kg) released against the wall of a bowl of
+    radius 0.5 m drawn as ``segments`` segments (Exudyn's contactCurvePolynomial.py: a pin on a
+    circular arc); it slides down and up the other side in continuous contact (1e6 N/m,
+    1e3 Ns/m, no friction), from one segment to the next."""
+    mbs = exu.SystemContainer().AddSystem()
+    ground = mbs.CreateGround()
+    m_ground = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    R, r = 0.5, 0.02
+    pin = mbs.CreateRigidBody(referencePosition=[(R - r) * np.sin(1.2), -(R - r) * np.cos(1.2) + 0.002, 0],
+                              inertia=InertiaCylinder(density=4e4, length=0.02, outerRadius=r, axis=2),
+                              gravity=[0, -9.81, 0], create2D=True)
+    m_pin = mbs.AddMarker(MarkerBodyRigid(bodyNumber=pin))
+    phi = np.linspace(-0.5 * np.pi, 0.5 * np.pi, segments + 1)
+    pts = np.array([R * np.sin(phi), -R * np.cos(phi)]).T
+    seg = np.hstack([pts[1:], pts[:-1]])    # each from its right end to its left: the inside is the exterior
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[-1, 0, 0] * segments, numberOfDataCoordinates=3 * segments))
+    mbs.AddObject(ObjectContactCurveCircles(markerNumbers=[m_ground, m_pin], nodeNumber=data, circlesRadii=[r],
+                                            segmentsData=exu.MatrixContainer(seg),
+                                            contactStiffness=1e6, contactDamping=1e3))
+    mbs.Assemble()
+    return mbs, _settings(t_end, n), mbs.GetObject(pin)["nodeNumber"]
