@@ -41,7 +41,9 @@ REDO = "redo"
 #: states that never settle shorten the step down to this fraction of the run's step, where
 #: they are kept when the model ignores max iterations (keeping them at the full step: a
 #: rolling coin 5e-3 off Exudyn's result at any step; shortening to h_event: a car on two
-#: penalty wheels advanced 1e-8 s per step)
+#: penalty wheels advanced 1e-8 s per step); a model whose states cannot settle however
+#: short the step (a dry friction whose direction flips at every redo of a sticking wheel)
+#: sets its own ``unsettled_cut`` (1: kept at the step's length, as Exudyn keeps them)
 UNSETTLED_CUT = 1.0 / 16
 
 
@@ -57,9 +59,12 @@ def attempt_discontinuous(sim, h, post):
     iterates; states that still move after those redos shorten the step as a switch does
     (Exudyn's ``ignoreMaxIterations = False``), but when the model's
     ``ignore_max_discontinuous`` is true (Exudyn's default ``ignoreMaxIterations = True``: a
-    friction direction flipping at every redo of a sticking wheel) only down to
-    ``UNSETTLED_CUT`` of the run's step (``sim.dt``, else ``sim.max_step``), where they are
-    kept and the step accepted. Returns the stepper's (accepted, h_new)."""
+    friction direction flipping at every redo of a sticking wheel) only down to the model's
+    ``unsettled_cut`` (else ``UNSETTLED_CUT``) of the run's step (``sim.dt``, else
+    ``sim.max_step``), where they are kept and the step accepted. Exudyn's own loop keeps the
+    states of its last solve, so a model emulating it counts its redos as Exudyn does (a
+    friction direction flipping at every solve: the kept force depends on the parity of the
+    count). Returns the stepper's (accepted, h_new)."""
     st, m, t = sim.stepper, sim.model, sim.t
     snap, d0 = st.snapshot(), m.discontinuous_state()
     # a step no longer than the floor up to rounding is at the floor (a step landing on the end
@@ -68,13 +73,15 @@ def attempt_discontinuous(sim, h, post):
     n_max = int(getattr(m, "max_discontinuous", sim.MAX_DISCONTINUOUS))
     ignore = bool(getattr(m, "ignore_max_discontinuous", False))
     nominal = getattr(sim, "dt", None) or getattr(sim, "max_step", None) or h     # the run's step
+    # (up to rounding: a step ending on a time grid point is longer than dt by an ulp)
+    keep = max(floor, float(getattr(m, "unsettled_cut", UNSETTLED_CUT)) * nominal * (1.0 + 1e-9))
     accepted, h_new = st.attempt(t, h)
     for k in range(n_max + 1):
         changed = post(st.q, st.V, t + h) if accepted else False
         if not changed:
             break
         last = k == n_max
-        if last and changed == REDO and ignore and h <= max(floor, UNSETTLED_CUT * nominal):
+        if last and changed == REDO and ignore and h <= keep:
             break                                           # unsettled: kept, as Exudyn does
         if (changed != REDO or last) and h > floor:         # a switch within the step: locate it
             st.restore(snap)

@@ -39,12 +39,26 @@ class StepHooks:
             s = settings if settings is not None else engine.exu.SimulationSettings()
             disc = s.timeIntegration.discontinuous
             self._disc_tol = float(disc.iterationTolerance)
-            # unsettled states after maxIterations redos: kept (ignoreMaxIterations) or the step cut
-            self.max_discontinuous = max(0, int(disc.maxIterations))
+            # Exudyn's maxIterations counts the Newton solves of a step, the first included: its
+            # redos are one fewer. Unsettled states after them: kept (ignoreMaxIterations) or the
+            # step cut. The count matters where they never settle: a sticking wheel's friction
+            # direction flips at every solve, and the step keeps the force of its last solve
+            # (createRollingDiscPenaltyTest.py with one solve more than Exudyn's: 4.5e-3 m off
+            # Exudyn refined at the script's steps, Exudyn's own 2.9e-4; with Exudyn's count 1.5e-4)
+            self.max_discontinuous = max(0, int(disc.maxIterations) - 1)
             self.ignore_max_discontinuous = bool(disc.ignoreMaxIterations)
+            if coulomb_wheels(mbs):     # their stick never settles: kept at the step's length
+                self.unsettled_cut = 1.0
             self._gap_rows, self._mode_rows = gap_rows(mbs), mode_rows(mbs)
             self._circle_rows = curve_circle_rows(mbs)
             self.locate_circle_contacts = False     # the drop-in sets it for error-controlled runs
+            # gaps and modes that change sign are switches located in time (error-controlled
+            # runs: the error falls with the tolerance); the drop-in's fixed steps take them as
+            # Exudyn does, redone at the step's end when PostNewton's error exceeds its
+            # tolerance (located there, Exudyn's rollingCoinPenaltyTest.py at its steps: the
+            # coin's touch-down cut a step to 1e-8 s and the steps after it ended 2e-2 off
+            # Exudyn refined, Exudyn's own 5e-5; redone: 4e-4)
+            self.locate_switches = True
             note_lagged_objects(mbs)
             refuse_impact_models(mbs)
             refuse_sliding_joints(mbs)
@@ -318,6 +332,20 @@ def note_lagged_objects(mbs):
                 "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
                 "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
                 "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
+
+
+def coulomb_wheels(mbs):
+    """Indices of the ConnectorRollingDiscPenalty objects with dry friction and no
+    proportional zone (``dryFrictionProportionalZone = 0``, Exudyn's default): their friction
+    force has its full size along the slip direction stored at the last solve, so a sticking
+    wheel's force flips at every solve of Exudyn's discontinuous iteration, which never
+    settles however short the step (with a zone the stick settles: PostNewton's error is 0
+    while the stored slip is within it). Exudyn keeps such a step after maxIterations solves
+    (ignoreMaxIterations); shortening it only multiplies the steps
+    (createRollingDiscPenaltyTest.py: 16x the steps for an error 2x below Exudyn's own)."""
+    return [k for k, kind, o in objects(mbs) if kind == "ConnectorRollingDiscPenalty"
+            and float(o.get("dryFrictionProportionalZone", 0.0)) == 0.0
+            and any(float(f) != 0.0 for f in np.ravel(o.get("dryFriction", [0.0])))]
 
 
 def mode_rows(mbs):

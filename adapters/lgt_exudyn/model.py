@@ -160,9 +160,11 @@ class ExudynModel(StepHooks, Model):
     # ------------------------------------------------------------------ discontinuous states
     def _post_newton(self, q, V, t):
         """Exudyn's discontinuous iteration at the end of a step (its PostNewton: contact and
-        friction states updated from the state (q, V, t)): True for a switch, REDO when they
-        moved by more than timeIntegration.discontinuous.iterationTolerance, else False."""
+        friction states updated from the state (q, V, t)): True for a switch (``locate_switches``),
+        REDO when they moved by more than timeIntegration.discontinuous.iterationTolerance, else False."""
         self.write_back(q, V, t)
+        if not self.locate_switches:            # the drop-in's fixed steps: Exudyn's own rule
+            return REDO if float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol else False
         gaps, modes = self._gap_rows, self._mode_rows
         d0 = np.array(self.sd.GetDataCoordinates()) if len(gaps) or len(modes) or self._circle_rows else None
         moved = float(self.solver.PostNewton(self.mbs, self.engine.settings)) > self._disc_tol

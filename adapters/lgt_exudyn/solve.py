@@ -218,6 +218,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     sim.reference_steps = (n, t0, t1, f"Exudyn's own solver (numberOfSteps = {n})")
     if hasattr(model, "locate_circle_contacts"):
         model.locate_circle_contacts = controlled   # (hooks.curve_circle_rows)
+        model.locate_switches = controlled          # fixed steps: Exudyn's redos (hooks.py)
     if not controlled:
         sim.min_step = 0.0
     else:

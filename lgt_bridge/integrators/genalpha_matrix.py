@@ -257,14 +257,19 @@ def factorize(J, L=None, compiled=False, memo=None):
         lu = sla.lu_factor(J.toarray() if sparse.issparse(J) else J, check_finite=False)
     if not np.all(np.diag(lu[0])):
         raise np.linalg.LinAlgError("the matrix is exactly singular")
+    # LAPACK's getrs itself, as scipy's lu_solve calls it: lu_solve's argument checks cost
+    # ~10 µs a call (up to 30 µs under load) against ~1 µs for the solve of a few dozen
+    # unknowns, a third of a Newton update of a board on two penalty wheels
+    from scipy.linalg.lapack import dgetrs
+    lu, piv = lu
     if L is None:
-        return lambda r: sla.lu_solve(lu, r, check_finite=False)
-    # J⁻¹L column by column: scipy's lu_solve on a matrix right-hand side is OpenBLAS's
-    # threaded trsm below 32 rows, ~15 ms a call while the cores are busy (a column: 5-10 µs)
+        return lambda r: dgetrs(lu, piv, r)[0]
+    # J⁻¹L column by column: a matrix right-hand side is OpenBLAS's threaded trsm below 32
+    # rows, ~15 ms a call while the cores are busy (a column: 1-10 µs)
     L = L.toarray() if sparse.issparse(L) else np.asarray(L)
     X = np.empty((J.shape[0], L.shape[1]))
     for j in range(L.shape[1]):
-        X[:, j] = sla.lu_solve(lu, L[:, j], check_finite=False)
+        X[:, j] = dgetrs(lu, piv, L[:, j])[0]
     return X.dot
 
 

@@ -147,3 +147,18 @@ def test_states_that_never_settle_are_kept_when_the_model_ignores_max_iterations
         steps.append(r.stats["n_steps"])
     n_cut = round(0.1 / (0.02 * switches.UNSETTLED_CUT))
     assert n_cut <= steps[0] <= 1.2 * n_cut and steps[1] >= 0.1 / (0.02 / 64) - 1, steps
+
+
+def test_states_that_cannot_settle_are_kept_at_the_runs_step():
+    """A model whose own ``unsettled_cut`` is 1 (Exudyn's RollingDiscPenalty with Coulomb
+    friction: a sticking wheel's friction direction flips at every redo, however short the
+    step) keeps unsettled states at the run's step, as Exudyn does: rkmk4 takes its 5 steps of
+    0.02 over 0.1, after max_discontinuous redos each (a step landing on a time of the grid
+    is longer than dt by an ulp: it counts as at it, not as a step to cut)."""
+    m = _Lagged("never")
+    m.max_discontinuous, m.ignore_max_discontinuous, m.unsettled_cut = 3, True, 1.0
+    s = Simulation(m, method="rkmk4", dt=0.02)
+    s.h_event = 0.02 / 64
+    r = s.run(0.1, t_eval=[0.1])
+    assert r.success and r.stats["n_steps"] == 5
+    assert m.calls == 5 * (3 + 1)

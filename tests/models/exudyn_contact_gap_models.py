@@ -10,7 +10,9 @@ simulationSettings, node)`` freshly assembled:
   ObjectContactCurveCircles, rolling over the segments' ends (Exudyn's chainDriveExample.py
   and contactCurveExample.py: rollers on a sprocket's polygon);
 - a pin sliding down a bowl of segments through an ObjectContactCurveCircles, in contact all
-  along (Exudyn's contactCurvePolynomial.py).
+  along (Exudyn's contactCurvePolynomial.py);
+- a coin dropped rolling onto the ground through an ObjectConnectorRollingDiscPenalty with
+  regularized dry friction (Exudyn's rollingCoinPenaltyTest.py).
 """
 import numpy as np
 
@@ -105,3 +107,37 @@ def pin_in_polygon_bowl(t_end=0.3, n=300, segments=32):
                                             contactStiffness=1e6, contactDamping=1e3))
     mbs.Assemble()
     return mbs, _settings(t_end, n), mbs.GetObject(pin)["nodeNumber"]
+
+
+def coin_dropped(t_end=0.5, n=5000):
+    """(mbs, settings, contact object): Exudyn's rollingCoinPenaltyTest.py as written: a 1 kg
+    coin of radius 1 cm (EP node), nicked 5°, rolling at 40 rad/s, released 1 cm above the
+    ground; an ObjectConnectorRollingDiscPenalty (k = 1e5, d = 1e4, dry friction 0.8 with a
+    proportional zone of 1e-2 m/s, viscous rolling friction) on a NodeGenericData holds its
+    slip velocity and gap; Newmark, index-2 constraints, spectral radius 0.5. It touches
+    down at 0.045 s; the output is the contact point (``OutputVariableType.Position``)."""
+    from exudyn.utilities import AddRigidBody, ObjectConnectorRollingDiscPenalty, RigidBodyInertia, Skew
+    mbs = exu.SystemContainer().AddSystem()
+    phi0, m, r = 5.0 / 180.0 * np.pi, 1.0, 0.01
+    p0 = [r * np.sin(phi0), 0, r * np.cos(phi0) + 0.01]
+    rotation = RotationMatrixY(phi0)
+    omega0 = [40, 0, 0]
+    v0 = Skew(omega0) @ rotation @ [0, 0, r]
+    inertia = RigidBodyInertia(mass=m, inertiaTensor=np.diag([0.5 * m * r**2, 0.25 * m * r**2, 0.25 * m * r**2]))
+    _, body = AddRigidBody(mainSys=mbs, inertia=inertia, nodeType=str(exu.NodeType.RotationEulerParameters),
+                           position=p0, rotationMatrix=rotation, angularVelocity=omega0, velocity=v0,
+                           gravity=[0, 0, -9.81])
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    mc = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body, localPosition=[0, 0, 0]))
+    data = mbs.AddNode(NodeGenericData(initialCoordinates=[0, 0, 0], numberOfDataCoordinates=3))
+    contact = mbs.AddObject(ObjectConnectorRollingDiscPenalty(
+        markerNumbers=[mg, mc], nodeNumber=data, discRadius=r, dryFriction=[0.8, 0.8],
+        dryFrictionProportionalZone=1e-2, rollingFrictionViscous=0.2, contactStiffness=1e5, contactDamping=1e4))
+    mbs.Assemble()
+    s = _settings(t_end, n)
+    ga = s.timeIntegration.generalizedAlpha
+    ga.useIndex2Constraints = ga.useNewmark = True
+    ga.spectralRadius = 0.5
+    ga.computeInitialAccelerations = True
+    return mbs, s, contact
