@@ -323,6 +323,8 @@ class Radau5(Stepper):
             mult = h / self._h_old * (self._err_old / en) ** 0.25
         fac = min(1.0, mult) * (en ** -0.25 if en > 0.0 else self.MAX_FACTOR)
         fac = min(self.MAX_FACTOR, safety * fac)
+        if self._rejected:
+            fac = min(fac, 1.0)                 # no growth right after a rejection (RADAU5's rule)
         if not recompute and fac < 1.2:
             fac = 1.0                           # keep the factors
         self._h_old, self._err_old = h, en
