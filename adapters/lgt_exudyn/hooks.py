@@ -310,14 +310,20 @@ def circles_pushed(d, rows):
 
 
 def note_lagged_objects(mbs):
-    """A ModelNote naming each LAGGED_OBJECTS object of the system."""
+    """One ModelNote per LAGGED_OBJECTS kind, naming every object of that kind in the system
+    (a mecanum-wheel car printed the same paragraph once per wheel)."""
+    found = {}
     for k, kind, o in objects(mbs):
         if kind in LAGGED_OBJECTS:
-            warnings.warn(ModelNote(
-                f"Exudyn object {k} {o.get('name', '')!r} (Object{kind}): {LAGGED_OBJECTS[kind]}, so its "
-                "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
-                "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
-                "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
+            found.setdefault(kind, []).append(f"{k} {o.get('name', '')!r}")
+    for kind, names in found.items():
+        which = (f"object {names[0]} (Object{kind})" if len(names) == 1
+                 else f"objects {', '.join(names)} (Object{kind}, each)")
+        warnings.warn(ModelNote(
+            f"Exudyn {which}: {LAGGED_OBJECTS[kind]}, so the "
+            "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
+            "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
+            "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
 
 
 def mode_rows(mbs):

@@ -81,3 +81,21 @@ def test_states_that_never_settle_keep_the_step_as_exudyn_does():
     st = mbs.sys["lgtBridgeStats"]
     assert st["success"] and st["n_steps"] < 2 * 50 / switches.UNSETTLED_CUT       # (measured 960)
     assert np.abs(_body_position(mbs, wheel) - ref).max() < 5e-5
+
+
+def test_lagged_forces_of_one_kind_are_named_in_one_note():
+    """Exudyn's createRollingDiscPenaltyTest.py (two RollingDiscPenalty wheels): one note naming
+    both objects (Exudyn's mobileMecanumWheelRobotWithLidar.py printed the same paragraph once
+    per wheel, four times)."""
+    mbs, s, _ = penalty_two_wheeler()
+    wheels = [k for k in range(mbs.systemData.NumberOfObjects())
+              if "RollingDiscPenalty" in str(mbs.GetObject(k)["objectType"])]
+    assert len(wheels) == 2
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        ExudynModel(mbs, s)
+    notes = [str(w.message) for w in rec if issubclass(w.category, ModelNote) and "RollingDiscPenalty" in str(w.message)]
+    assert len(notes) == 1, notes
+    for k in wheels:
+        assert f" {k} '" in notes[0], (k, notes[0])
+    assert "slip velocity stored at the last step's end" in notes[0]
