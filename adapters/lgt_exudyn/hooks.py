@@ -387,14 +387,15 @@ def refuse_sliding_joints(mbs):
                 "Exudyn's own exu.SolveDynamic.")
 
 
-def general_contacts(mbs, located=True):
+def general_contacts(mbs, located=True, chatter=False):
     """What a failed step should say about Exudyn's GeneralContact, or "" when the system has
     none. Its forces come from the active sets its PostNewton sets from the state (a pair is
     active while its gap is closed and its force compressive): the bridge takes them at each
     step's start and, with a method that has dense output (``located``), locates where they
     switch inside the step and restarts there (:mod:`lgt_bridge.switches`); without (or when
     the system's data coordinates make it run Exudyn's discontinuous iteration instead), a
-    step across a switch meets the jump of the contact damping force. Names each one with its
+    step across a switch meets the jump of the contact damping force (``chatter``: the
+    failure already says the switches follow each other at once). Names each one with its
     parts."""
     parts = []
     for i in range(_contact.count(mbs)):
@@ -410,6 +411,9 @@ def general_contacts(mbs, located=True):
         return ""
     head = (f" The system has {' and '.join(parts)}: its contact forces switch on and off where a gap "
             "closes or a contact force would pull (Exudyn's active sets)")
+    if chatter:
+        return head + ("; lgt_bridge located these switches and restarted at each, and here they follow "
+                       "each other at once.")
     if located:
         return (head + "; lgt_bridge located these switches and restarted at each, so the failure is not a "
                 "step across one: the contact phase itself needs smaller steps (stiff contact: "
