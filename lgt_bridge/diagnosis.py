@@ -77,6 +77,9 @@ def singular_configuration(sim):
 #: motion, however fast, costs the PI controller a few rejections per hundred steps; the
 #: Coulomb oscillator sticking under sign(v) friction costs 1.4 per step)
 CHATTER_REJECTIONS = 0.5
+#: a window in which at least this fraction of the steps ended at a located switch of the
+#: model's mode: the mode chatters, switching again at once after each switch
+CHATTER_SWITCHES = 0.5
 
 
 def jump_size_at_end(sim):
@@ -211,9 +214,10 @@ def unaffordable(sim):
         return None
     if singular_configuration(sim) is not None:
         return None     # short steps from a singular configuration: the min_step check says so
-    limit = stability_limit(sim, h_now) if (explicit and not jumps) else None
+    switched = switch_chatter(sim, t1, window)
+    limit = stability_limit(sim, h_now) if (explicit and not jumps and not switched) else None
     name = (ref[3] if len(ref) > 3 else "the engine's own steps") if ref is not None else None
-    if ref_rest is not None and limit is None:
+    if ref_rest is not None and limit is None and not switched:
         # held by accuracy: the run is the caller's to afford (max_steps); said once
         if explicit and not getattr(sim, "_slow_noted", False):
             sim._slow_noted = True
@@ -229,7 +233,9 @@ def unaffordable(sim):
                 f"{sim.n_steps - n0} steps its step has been steady at h ≈ {h_now:.3g} s, and the rest of "
                 f"the run, from t = {sim.t:.9g} to {end:.9g}, would need about {need:d} more steps "
                 f"({left:d} left).")
-    if limit is not None:
+    if switched:
+        why = switched
+    elif limit is not None:
         why = " " + limit
     elif jumps:
         why = (f" Its error control rejected {chatter:.2g} attempts per accepted step there: the model's "
@@ -246,6 +252,26 @@ def unaffordable(sim):
     else:
         why = " Loosen the tolerances, or raise max_steps."
     return head + why
+
+
+def switch_chatter(sim, t_from, window):
+    """The sentence saying that the model's mode chatters when at least CHATTER_SWITCHES of the
+    ``window`` steps since ``t_from`` ended at a switch its SwitchLocator located (and
+    ``sim.mode_chatter`` set), else None. Each cut step restarts at its switch, the mode
+    switches back at once, and the next step is cut again: a contact pair at zero gap (a
+    cable lying on a roll: Exudyn's reevingSystemOpen.py, dopri5 and radau5 held at 1e-17 s)."""
+    loc = getattr(sim, "_switches", None)
+    if loc is None or window <= 0:
+        return None
+    n = sum(1 for s in loc.t_switches[-window:] if s > t_from)
+    if n < CHATTER_SWITCHES * window:
+        return None
+    sim.mode_chatter = True
+    return (f" {n} of its last {window} steps ended at a located switch of the model's mode, which switched "
+            "again at once: the mode chatters (a contact pair at zero gap, such as a cable lying on a roll, "
+            "opening and closing), and a method with dense output (dopri5, dop853, radau5) cuts every step "
+            "at the next switch. Use method='genalpha': it takes the mode at the start of each of its "
+            "steps, as the engine's own solver does.")
 
 
 def _note_stiff(sim, need, ref_rest, ref, wall_rest, h_now):

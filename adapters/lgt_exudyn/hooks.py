@@ -324,14 +324,20 @@ def circles_pushed(d, rows):
 
 
 def note_lagged_objects(mbs):
-    """A ModelNote naming each LAGGED_OBJECTS object of the system."""
+    """One ModelNote per LAGGED_OBJECTS kind, naming every object of that kind in the system
+    (a mecanum-wheel car printed the same paragraph once per wheel)."""
+    found = {}
     for k, kind, o in objects(mbs):
         if kind in LAGGED_OBJECTS:
-            warnings.warn(ModelNote(
-                f"Exudyn object {k} {o.get('name', '')!r} (Object{kind}): {LAGGED_OBJECTS[kind]}, so its "
-                "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
-                "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
-                "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
+            found.setdefault(kind, []).append(f"{k} {o.get('name', '')!r}")
+    for kind, names in found.items():
+        which = (f"object {names[0]} (Object{kind})" if len(names) == 1
+                 else f"objects {', '.join(names)} (Object{kind}, each)")
+        warnings.warn(ModelNote(
+            f"Exudyn {which}: {LAGGED_OBJECTS[kind]}, so the "
+            "motion depends on where the steps end, converging as they shorten (Exudyn's own solver "
+            "too). method='genalpha' at Exudyn's steps reproduces Exudyn's result; the adaptive "
+            "methods' steps differ (a mecanum-wheel car: 2e-3 relative at 1e-8)."), stacklevel=4)
 
 
 def coulomb_wheels(mbs):
@@ -409,14 +415,15 @@ def refuse_sliding_joints(mbs):
                 "Exudyn's own exu.SolveDynamic.")
 
 
-def general_contacts(mbs, located=True):
+def general_contacts(mbs, located=True, chatter=False):
     """What a failed step should say about Exudyn's GeneralContact, or "" when the system has
     none. Its forces come from the active sets its PostNewton sets from the state (a pair is
     active while its gap is closed and its force compressive): the bridge takes them at each
     step's start and, with a method that has dense output (``located``), locates where they
     switch inside the step and restarts there (:mod:`lgt_bridge.switches`); without (or when
     the system's data coordinates make it run Exudyn's discontinuous iteration instead), a
-    step across a switch meets the jump of the contact damping force. Names each one with its
+    step across a switch meets the jump of the contact damping force (``chatter``: the
+    failure already says the switches follow each other at once). Names each one with its
     parts."""
     parts = []
     for i in range(_contact.count(mbs)):
@@ -432,6 +439,9 @@ def general_contacts(mbs, located=True):
         return ""
     head = (f" The system has {' and '.join(parts)}: its contact forces switch on and off where a gap "
             "closes or a contact force would pull (Exudyn's active sets)")
+    if chatter:
+        return head + ("; lgt_bridge located these switches and restarted at each, and here they follow "
+                       "each other at once.")
     if located:
         return (head + "; lgt_bridge located these switches and restarted at each, so the failure is not a "
                 "step across one: the contact phase itself needs smaller steps (stiff contact: "

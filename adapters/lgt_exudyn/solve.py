@@ -411,7 +411,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
               f"f evaluations, {st['wall_s']:.3f} s")
     if failure:
         located = stepper.dense_capable and hasattr(model, "switch_mode")     # GeneralContact switches
-        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]}{general_contacts(mbs, located)} The system is left "
+        gc = general_contacts(mbs, located, getattr(sim, "mode_chatter", False))
+        raise StepError(f"lgt_bridge SolveDynamic: {failure[0]}{gc} The system is left "
                         f"at t = {sim.t:.9g}.")
     if updateInitialValues:
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(), exu.ConfigurationType.Initial)

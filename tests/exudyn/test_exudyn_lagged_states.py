@@ -100,3 +100,21 @@ def test_the_two_wheeler_script_runs_at_its_steps_as_accurately_as_exudyn():
     st, err, own = _two_wheeler_errors(1.0, 500, 20)
     assert st["success"] and st["n_steps"] <= 1.5 * 500
     assert err < own
+
+
+def test_lagged_forces_of_one_kind_are_named_in_one_note():
+    """Exudyn's createRollingDiscPenaltyTest.py (two RollingDiscPenalty wheels): one note naming
+    both objects (Exudyn's mobileMecanumWheelRobotWithLidar.py printed the same paragraph once
+    per wheel, four times)."""
+    mbs, s, _ = penalty_two_wheeler()
+    wheels = [k for k in range(mbs.systemData.NumberOfObjects())
+              if "RollingDiscPenalty" in str(mbs.GetObject(k)["objectType"])]
+    assert len(wheels) == 2
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        ExudynModel(mbs, s)
+    notes = [str(w.message) for w in rec if issubclass(w.category, ModelNote) and "RollingDiscPenalty" in str(w.message)]
+    assert len(notes) == 1, notes
+    for k in wheels:
+        assert f" {k} '" in notes[0], (k, notes[0])
+    assert "slip velocity stored at the last step's end" in notes[0]
