@@ -56,8 +56,8 @@ class StepHooks:
             # runs: the error falls with the tolerance); the drop-in's fixed steps take them as
             # Exudyn does, redone at the step's end when PostNewton's error exceeds its
             # tolerance (located there, Exudyn's rollingCoinPenaltyTest.py at its steps: the
-            # coin's touch-down cut a step to 1e-8 s and the steps after it ended 2e-2 off
-            # Exudyn refined, Exudyn's own 5e-5; redone: 4e-4)
+            # coin's touch-down cut a step to 1e-8 s and its contact point ended 7.9e-4 m off
+            # Exudyn refined 10x, Exudyn's own 1.7e-6; redone: 2.8e-5)
             self.locate_switches = True
             note_lagged_objects(mbs)
             refuse_impact_models(mbs)

@@ -199,9 +199,9 @@ class CompiledProblem(LocalProblem):
         arithmetic in two kernel calls around the one f it needs."""
         nX = self.nX
         Y = np.empty(nX + len(fW))
-        h0 = _steps.h0_start(fX, fW, W, float(rtol), float(atol), Y)
+        h0, d1 = _steps.h0_start(fX, fW, W, float(rtol), float(atol), Y)
         f1 = self.rates(Y[:nX], Y[nX:], t + h0)
-        return _steps.h0_end(f1, fX, fW, W, float(rtol), float(atol), h0, float(order))
+        return _steps.h0_end(f1, fX, fW, W, float(rtol), float(atol), h0, d1, float(order))
 
     # --- generalized-α ---------------------------------------------------------------
     def ga_state(self, Wd, sv, sp, Wa, dXa, to_local):

@@ -274,10 +274,11 @@ def drive(Vd, w, I, L):
 # (the reference), on y = (X, W) from X = 0 with f0 = (fX, fW): its arithmetic in two calls
 # around the one f it needs (about twenty numpy operations on short vectors otherwise, as much
 # as a small robot's whole set-up). sc = atol + rtol |y0| is atol on X (y0's X is 0).
-@njit("float64(float64[::1], float64[::1], float64[::1], float64, float64, float64[::1])",
+@njit("UniTuple(float64, 2)(float64[::1], float64[::1], float64[::1], float64, float64, float64[::1])",
       cache=True, error_model="numpy")
 def h0_start(fX, fW, W, rtol, atol, Y):
-    """The trial step h0 = 0.01 d0/d1 (1e-6 when either is below 1e-5), and Y = y0 + h0 f0."""
+    """(h0, d1): the trial step h0 = 0.01 d0/d1 (1e-6 when either is below 1e-5) and d1 = |f0|
+    (scaled RMS, :func:`h0_end` takes it), and Y = y0 + h0 f0."""
     nX, nv = len(fX), len(fW)
     n = nX + nv
     s0 = s1 = 0.0
@@ -297,29 +298,23 @@ def h0_start(fX, fW, W, rtol, atol, Y):
         Y[i] = h0 * fX[i]
     for i in range(nv):
         Y[nX + i] = W[i] + h0 * fW[i]
-    return h0
+    return h0, d1
 
 
-@njit("float64(float64[::1], float64[::1], float64[::1], float64[::1], float64, float64, float64, float64)",
+@njit("float64(float64[::1], float64[::1], float64[::1], float64[::1], float64, float64, float64, float64, float64)",
       cache=True, error_model="numpy")
-def h0_end(f1, fX, fW, W, rtol, atol, h0, order):
-    """The starting step from f1 = f(y0 + h0 f0): d2 = |f1 - f0| / h0 and
-    min(100 h0, (0.01 / max(d1, d2))^(1/order)) (max(1e-6, 1e-3 h0) when both vanish)."""
+def h0_end(f1, fX, fW, W, rtol, atol, h0, d1, order):
+    """The starting step from f1 = f(y0 + h0 f0) and :func:`h0_start`'s (h0, d1): d2 = |f1 - f0| / h0
+    and min(100 h0, (0.01 / max(d1, d2))^(1/order)) (max(1e-6, 1e-3 h0) when both vanish)."""
     nX, nv = len(fX), len(fW)
     n = nX + nv
-    s1 = s2 = 0.0
+    s2 = 0.0
     for i in range(nX):
-        x = fX[i] / atol
-        s1 += x * x
         x = (f1[i] - fX[i]) / atol
         s2 += x * x
     for i in range(nv):
-        sc = atol + rtol * abs(W[i])
-        x = fW[i] / sc
-        s1 += x * x
-        x = (f1[nX + i] - fW[i]) / sc
+        x = (f1[nX + i] - fW[i]) / (atol + rtol * abs(W[i]))
         s2 += x * x
-    d1 = math.sqrt(s1 / n) if n else 0.0
     d2 = (math.sqrt(s2 / n) if n else 0.0) / h0
     m = d2 if d2 > d1 else d1                   # Python's max(d1, d2), NaN included
     if m <= 1e-15:
