@@ -12,7 +12,7 @@ from pathlib import Path
 _HERE = Path(__file__).resolve().parent
 #: what every kernel module compiles in besides its own source: the scalar helpers it calls
 #: and the series coefficients they bake in
-SHARED_SOURCES = (_HERE / "rotations.py", _HERE / "charts.py", _HERE.parent / "_series.py",
+SHARED_SOURCES = (_HERE / "rotations.py", _HERE / "charts.py", _HERE / "views.py", _HERE.parent / "_series.py",
                   *sorted((_HERE.parent / "charts").glob("*.py")))
 
 

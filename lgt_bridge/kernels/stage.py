@@ -28,6 +28,7 @@ from numba import njit
 from . import guard_cache
 from .charts import increment, rot_rates, se3_rates, translation, usage
 from .rotations import cross, from_quat, qmul, rotate, to_quat
+from .views import matrix
 
 guard_cache(__file__)
 
@@ -71,7 +72,7 @@ def views(w, off):
     nX, nv, nq, nb = off[NX_], off[NV_], off[NQ_], off[NB_]
     return (w[off[OX]:off[OX] + nX], w[off[OW]:off[OW] + nv], w[off[OQ]:off[OQ] + nq],
             w[off[OV]:off[OV] + nv], w[off[OW0]:off[OW0] + nv], w[off[OQK]:off[OQK] + nq],
-            w[off[OPK]:off[OPK] + 4 * nb].reshape((nb, 4)), w[off[OP]:off[OP] + 4 * nb].reshape((nb, 4)))
+            matrix(w[off[OPK]:], nb, 4), matrix(w[off[OP]:], nb, 4))
 
 
 def body_table(sets, codes):
@@ -295,7 +296,7 @@ def tables(I):
     """(bt, vt, off) of an array made by :func:`pack_tables` (views)."""
     nb, nv = I[NOFF], I[NOFF + 1]
     o = NOFF + 2 + nb * NCOL
-    return I[NOFF + 2:o].reshape((nb, NCOL)), I[o:o + 4 * nv].reshape((nv, 4)), I[:NOFF]
+    return matrix(I[NOFF + 2:], nb, NCOL), matrix(I[o:], nv, 4), I[:NOFF]
 
 
 _V, _VC, _MC, _IC, _IMC = "float64[:]", "float64[::1]", "float64[:, ::1]", "int64[::1]", "int64[:, ::1]"

@@ -30,6 +30,7 @@ from numba import njit
 
 from . import guard_cache
 from .stage import OP, OQK, OPK, OW0, NB_, NQ_, NV_, NX_, stage, step_end
+from .views import block, matrix
 
 guard_cache(__file__, extra=(__file__.replace("steps.py", "stage.py"),))
 
@@ -61,9 +62,9 @@ def parts(L, nX, nv, nq, nb):
     ns = int(C[NSTAGES])
     o_s, o_ta, o_bx, o_bw, nta, nbuf = int(C[OS]), int(C[OTA]), int(C[OBX]), int(C[OBW]), int(C[NTA]), int(C[NBUF])
     S = L[o_s:o_ta]
-    TA = L[o_ta:o_ta + nta * ns].reshape((nta, ns))
-    BX = L[o_bx:o_bx + 2 * nbuf * nX].reshape((2, nbuf, nX))
-    BW = L[o_bw:o_bw + 2 * nbuf * nv].reshape((2, nbuf, nv))
+    TA = matrix(L[o_ta:], nta, ns)
+    BX = block(L[o_bx:], 2, nbuf, nX)
+    BW = block(L[o_bw:], 2, nbuf, nv)
     return C, S, TA, BX, BW
 
 ACCEPTED, PY_STEP, UNDERFLOW, MIN_STEP = 1, 2, 3, 4
@@ -255,8 +256,8 @@ def drive(Vd, w, I, L):
         cur, nbuf = int(C[CUR]), int(C[NBUF])
         o_bx = int(C[OBX]) + cur * nbuf * nX
         o_bw = int(C[OBW]) + cur * nbuf * nv
-        KX = L[o_bx:o_bx + nbuf * nX].reshape((nbuf, nX))
-        KW = L[o_bw:o_bw + nbuf * nv].reshape((nbuf, nv))
+        KX = matrix(L[o_bx:], nbuf, nX)
+        KW = matrix(L[o_bw:], nbuf, nv)
         o_ta = int(C[OTA])
         h_try = C[HT]
         C[NF] += 1.0
