@@ -59,17 +59,10 @@ def _view_intrinsic(ndim):
 
 
 if intrinsic is not None:
-    _matrix, _block = _view_intrinsic(2), _view_intrinsic(3)
-
-    @njit(cache=True, inline="always")
-    def matrix(a, n, m):
-        """a[:n*m] as an (n, m) C-contiguous view (a: 1-D, C-contiguous)."""
-        return _matrix(a, n, m)
-
-    @njit(cache=True, inline="always")
-    def block(a, n, m, k):
-        """a[:n*m*k] as an (n, m, k) C-contiguous view (a: 1-D, C-contiguous)."""
-        return _block(a, n, m, k)
+    #: a[:n*m] as an (n, m) C-contiguous view (a: 1-D, C-contiguous)
+    matrix = _view_intrinsic(2)
+    #: a[:n*m*k] as an (n, m, k) C-contiguous view (a: 1-D, C-contiguous)
+    block = _view_intrinsic(3)
 else:                                                 # pragma: no cover
     @njit(cache=True, inline="always")
     def matrix(a, n, m):
