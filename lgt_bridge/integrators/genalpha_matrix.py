@@ -142,9 +142,22 @@ class Kinematics:
         self.prob = prob
         self.dpsi = [s.chart.on("SO3" if s.rot_only else "SE3" if s.se3 else "SO3xR3").dpsi
                      for s in prob.sets]
+        if getattr(prob, "compiled", False):    # the same blocks from a kernel (kernels.genalpha.dpsi_neg)
+            from ..kernels.genalpha import dpsi_neg
+            self.dpsi = [self._compiled_dpsi(dpsi_neg, s.chart.code, 0 if s.rot_only else 2 if s.se3 else 1)
+                         for s in prob.sets]
         # vector and circle coordinates: dψ = 1 (circles: SO(2) is abelian)
         self.vector_v = np.array(prob.layout.vector_v + prob.layout.circle_v, int)
         self.wlin = [s.wlin for s in prob.sets if s.se3]
+
+    @staticmethod
+    def _compiled_dpsi(kernel, code, kind):
+        def dpsi(X):                            # the charts' dpsi(X) as dψ_{−(−X)}
+            X = np.ascontiguousarray(-X, dtype=float)
+            out = np.empty((X.shape[0], X.shape[1], X.shape[1]))
+            kernel(code, kind, X, out)
+            return out
+        return dpsi
 
     def rotations(self, quats):
         """R of every SE(3) body, per set, read off the problem's own V_lin = R u (whatever

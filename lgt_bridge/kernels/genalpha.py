@@ -9,6 +9,7 @@ import numpy as np
 from numba import njit
 
 from . import guard_cache
+from .charts import increment, rot_rates, se3_rates
 from .linalg import lu_solve
 from .stage import NX_, OXD, convert, tau_state, views
 
@@ -117,3 +118,56 @@ def predict(x, x_prev, alternating, out):
     for i in range(n):
         a, b = x[i], x_prev[i]
         out[i] = 0.0 if (a * b < 0.0 and abs(a) > big and abs(b) > big) else 2.0 * a - b
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _inv3(A, i0, j0, out, k0, l0):
+    """out[k0:k0+3, l0:l0+3] = the inverse of A[i0:i0+3, j0:j0+3] (adjugate over the
+    determinant: the blocks here are within a chart's domain, far from singular)."""
+    a, b, c = A[i0, j0], A[i0, j0 + 1], A[i0, j0 + 2]
+    d, e, f = A[i0 + 1, j0], A[i0 + 1, j0 + 1], A[i0 + 1, j0 + 2]
+    g, h, k = A[i0 + 2, j0], A[i0 + 2, j0 + 1], A[i0 + 2, j0 + 2]
+    c0, c1, c2 = e * k - f * h, f * g - d * k, d * h - e * g
+    r = 1.0 / (a * c0 + b * c1 + c * c2)
+    out[k0, l0], out[k0, l0 + 1], out[k0, l0 + 2] = c0 * r, (c * h - b * k) * r, (b * f - c * e) * r
+    out[k0 + 1, l0], out[k0 + 1, l0 + 1], out[k0 + 1, l0 + 2] = c1 * r, (a * k - c * g) * r, (c * d - a * f) * r
+    out[k0 + 2, l0], out[k0 + 2, l0 + 1], out[k0 + 2, l0 + 2] = c2 * r, (b * g - a * h) * r, (a * e - b * d) * r
+
+
+@njit("void(int64, int64, float64[:, ::1], float64[:, :, ::1])", cache=True, error_model="numpy")
+def dpsi_neg(code, kind, X, out):
+    """out[b] = dψ_{−X[b]} of every body of a set, chart ``code``; ``kind`` 0: SO(3) (3x3),
+    1: SO(3)×R³ (6x6, the identity on the translation), 2: SE(3) (6x6): the inverse of the
+    matrix of dψ⁻¹_{−x}, whose columns are the stage kernels' rates of unit vectors
+    (:func:`.charts.rot_rates`, :func:`.charts.se3_rates`). A batch of 36 bodies in numpy
+    (the charts' ``dpsi``, the reference) costs 70-270 µs, a third of a Newton matrix."""
+    m = out.shape[1]
+    M = np.empty((m, m))
+    for b in range(X.shape[0]):
+        x0, x1, x2 = X[b, 0], X[b, 1], X[b, 2]
+        phi = increment(code, x0, x1, x2)[4]
+        for k in range(m):
+            w = np.zeros(6)
+            w[k] = 1.0
+            r0, r1, r2 = rot_rates(code, x0, x1, x2, w[0], w[1], w[2], phi)
+            M[0, k], M[1, k], M[2, k] = r0, r1, r2
+            if m == 6:
+                if kind == 2:
+                    t0, t1, t2 = se3_rates(code, x0, x1, x2, X[b, 3], X[b, 4], X[b, 5], w[0], w[1], w[2],
+                                           w[3], w[4], w[5], phi)
+                else:
+                    t0, t1, t2 = w[3], w[4], w[5]
+                M[3, k], M[4, k], M[5, k] = t0, t1, t2
+        # block lower triangular [[A, 0], [B, C]]: inv = [[A⁻¹, 0], [-C⁻¹ B A⁻¹, C⁻¹]]
+        _inv3(M, 0, 0, out[b], 0, 0)
+        if m == 6:
+            _inv3(M, 3, 3, out[b], 3, 3)
+            for i in range(3):
+                for j in range(3):
+                    out[b, i, 3 + j] = 0.0
+                    s = 0.0
+                    for k in range(3):
+                        for l in range(3):
+                            s += out[b, 3 + i, 3 + k] * M[3 + k, l] * out[b, l, j]
+                    out[b, 3 + i, j] = -s
+

@@ -422,3 +422,27 @@ def test_the_compiled_newton_start_is_the_reference_predictor():
     y = rng.normal(size=(8, 2))
     assert np.array_equal(predict(y[:, 0], y[:, 1], compiled=True), predict(y[:, 0].copy(), y[:, 1].copy()))
     assert predict(np.zeros(0), np.zeros(0), compiled=True).shape == (0,)
+
+
+@pytest.mark.parametrize("chart", ["exp", "cay", "cay2"])
+@pytest.mark.parametrize("group", ["SO3", "SO3xR3", "SE3"])
+def test_the_compiled_chart_differentials_of_the_newton_matrix_are_the_charts_own(chart, group):
+    """kernels.genalpha.dpsi_neg (the Newton matrix's per-body dψ blocks on compiled problems:
+    the inverse of the stage kernels' dψ⁻¹ rates) equals the chart's numpy dψ and inverts its
+    dψ⁻¹, at coordinates up to 0.9 of the chart's limit (exp: angles up to 3 rad)."""
+    from lgt_bridge.charts import CHARTS
+    from lgt_bridge.kernels.genalpha import dpsi_neg
+    ch = CHARTS[chart]
+    maps = ch.on(group)
+    m = 3 if group == "SO3" else 6
+    rng = np.random.default_rng(7)
+    X = rng.normal(size=(200, m))
+    X[:, :3] *= (rng.uniform(0.0, 1.0, 200) * min(0.9 * ch.limit, 3.0) / np.linalg.norm(X[:, :3], axis=1))[:, None]
+    X[:5, :3] = [[0, 0, 0], [1e-9, 0, 0], [0, 1e-5, 0], [0, 0, 1e-3], [1e-8, -2e-8, 3e-8]]   # near the origin
+    out = np.empty((200, m, m))
+    dpsi_neg(ch.code, {"SO3": 0, "SO3xR3": 1, "SE3": 2}[group], np.ascontiguousarray(-X), out)
+    ref = maps.dpsi(X)
+    scale = np.abs(ref).max(axis=(1, 2))[:, None, None]
+    assert (np.abs(out - ref) <= 1e-13 * scale).all()
+    eye = np.broadcast_to(np.eye(m), out.shape)
+    assert np.abs(out @ maps.dpsi_inv(X) - eye).max() <= 1e-12
