@@ -275,6 +275,8 @@ def _jacobian_parts(model, q, V, t, sparse):
             from scipy.sparse import csr_matrix
             parts = [csr_matrix(X) for X in parts]
         return parts
+    if model._compiled:
+        return _compiled_parts(model, q, V, t, sparse)
     # H sparse: its products run in scipy's loops, not in a threaded BLAS whose
     # threads, woken once per matrix under load, cost ~30 ms a call
     H = model.nodes.H_sparse(np.asarray(q, float))
@@ -336,3 +338,26 @@ def residual_function(model):
         return Q, g
     model._residual_function = ((S, P, cons), evaluate)
     return evaluate
+
+
+def _compiled_parts(model, q, V, t, sparse):
+    """:func:`_jacobian_parts` with rotation coordinates on compiled models: Hᵀ J H by the
+    kernel that maps Exudyn's mass matrix (``kernel_maps.forces`` with V = 0 and Q = 0, whose
+    M̄ = Hᵀ M H holds for any square M), not by building H and multiplying sparse matrices
+    (0.6 ms a matrix on 36 bodies)."""
+    S, n2, nv = model.solver, model.n2, model.nv
+    q, V = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(V, dtype=float)
+    Mbar = model._forces_compiled(q, V, t)[1]           # (the state written: q, H V)
+    P, forces = model._pack(), model._kernels.forces
+    zero_v, zero_q, scratch = np.zeros(nv), np.zeros(n2), np.empty(nv)
+    parts = [Mbar]
+    for fq, fv in ((0.0, 1.0), (1.0, 0.0)):
+        S.ComputeJacobianODE2RHS(model.mbs, fq, fv, 1.0, 2)
+        J = np.ascontiguousarray(np.asarray(S.GetSystemJacobian())[:n2, :n2])
+        out = np.empty((nv, nv))
+        forces(P.T, P.off, P.w, q, zero_v, zero_q, J, scratch, out)
+        parts.append(-out)
+    if sparse:
+        from scipy.sparse import csr_matrix
+        parts = [csr_matrix(X) for X in parts]
+    return parts

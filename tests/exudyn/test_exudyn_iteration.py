@@ -132,3 +132,26 @@ def test_rotvec_newton_parts_are_a_selection_of_exudyns_jacobians(sparse, monkey
     for got, ref in zip(parts[1:], refs):
         got = got.toarray() if sparse else got
         assert np.abs(got - ref).max() <= 1e-14 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("node", ["EP", "Rxyz"])
+@pytest.mark.parametrize("sparse", [False, True])
+def test_compiled_newton_parts_equal_the_products_with_H(node, sparse):
+    """On compiled models Hᵀ J H comes from the mass-matrix kernel (kernel_maps.forces with
+    V = 0, Q = 0), not from H's sparse products: the same matrices to rounding."""
+    from lgt_exudyn import iteration
+    SC, mbs = em.spring_body_with_load(SPRING[node][0])
+    m = ExudynModel(mbs)
+    assert m._compiled
+    rng = np.random.default_rng(13)
+    q = m._moved(m.q0, rng.normal(size=m.nv) * 0.3, 1.0)
+    V, t = rng.normal(size=m.nv) * 2, 0.3
+    got = iteration._jacobian_parts(m, q, V, t, sparse)
+    m._compiled = False                              # the numpy path: H and its products
+    try:
+        ref = iteration._jacobian_parts(m, q, V, t, sparse)
+    finally:
+        m._compiled = True
+    for g, r in zip(got, ref):
+        g, r = (x.toarray() if hasattr(x, "toarray") else np.asarray(x) for x in (g, r))
+        assert np.abs(g - r).max() <= 1e-13 * np.abs(r).max()
