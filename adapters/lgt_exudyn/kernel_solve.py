@@ -4,7 +4,8 @@ tables of :mod:`.kernel_tables` and the core's Cholesky (:mod:`lgt_bridge.kernel
 
 * :func:`solve` (T, off, w, Mbar, A, Qbar, gam, Vd) -> flag: V̇ = M̄⁻¹(Q̄ - Aᵀλ),
   (A M̄⁻¹ Aᵀ) λ = A M̄⁻¹ Q̄ + γ (so A V̇ = -γ; ``solve_kkt(M̄, A, Q̄, -γ)``); M̄⁻¹ from the
-  packed diagonal blocks of the constant M̄ (Mbar 0 x 0) or a dense Mbar factorized here.
+  packed diagonal blocks of the constant M̄ (Mbar 0 x 0) or an Mbar factorized here within its
+  row envelope (:func:`row_envelope`: a block-diagonal M̄ costs its blocks).
   Flags: 0 done; 1 the Schur complement is not (well) positive definite (redundant
   constraints): w holds A M̄⁻¹ Aᵀ, its right-hand side, M̄⁻¹ Q̄ and M̄⁻¹ Aᵀ, finish with
   :func:`.kernels.solve_fallback`; 2 Mbar is not positive definite.
@@ -100,6 +101,23 @@ def _schur_blocks(T, off, w, A, Qbar):
                 w[ws + nc * i + k] += s
 
 
+@njit(cache=True, error_model="numpy")
+def row_envelope(Mbar):
+    """The row envelope of the lower triangle of Mbar (n x n): first[i] the first nonzero
+    column of row i (i for a row with only its diagonal), as :func:`lgt_bridge.kernels.linalg.cholesky`
+    reads it."""
+    n = Mbar.shape[0]
+    first = np.empty(n, np.int64)
+    for i in range(n):
+        f = i
+        for j in range(i):
+            if Mbar[i, j] != 0.0:
+                f = j
+                break
+        first[i] = f
+    return first
+
+
 @njit(f"int64({_T}, {_I}, {_V}, {_M}, {_M}, {_V}, {_V}, {_V})", cache=True, error_model="numpy")
 def solve(T, off, w, Mbar, A, Qbar, gam, Vd):
     """V̇ = M̄⁻¹(Q̄ - Aᵀλ), (A M̄⁻¹ Aᵀ) λ = A M̄⁻¹ Q̄ + γ (A V̇ = -γ, as
@@ -129,16 +147,19 @@ def solve(T, off, w, Mbar, A, Qbar, gam, Vd):
         for i in range(nv):                 # M̄ into its factor's place, factorized there
             for j in range(nv):
                 L[nv * i + j] = Mbar[i, j]
-        if not cholesky(L, nv, dense)[0]:
+        # within M̄'s row envelope: the same factor (the entries left of it stay exact zeros),
+        # the work of its blocks (a kinematic tree next to point masses: 6 x 6 and diagonal)
+        env = row_envelope(Mbar)
+        if not cholesky(L, nv, env)[0]:
             return 2
         for j in range(nv):
             w[wm + j] = Qbar[j]
-        cholesky_solve(L, nv, dense, w[wm:wm + nv])
+        cholesky_solve(L, nv, env, w[wm:wm + nv])
         for k in range(nc):
             y = w[wy + nv * k:wy + nv * (k + 1)]
             for j in range(nv):
                 y[j] = A[k, j]
-            cholesky_solve(L, nv, dense, y)
+            cholesky_solve(L, nv, env, y)
         for i in range(nc):
             for k in range(i + 1):
                 s = 0.0

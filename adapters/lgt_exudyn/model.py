@@ -442,7 +442,8 @@ class ExudynModel(StepHooks, Model):
         constraints fix (the solves invert M̄; ``simulate`` checks before the first step; the ODE2
         part's: the ODE1 block is the identity); a constant positive definite M̄ is checked once, by the
         Cholesky factors of its diagonal blocks, for all later runs."""
-        from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects, mass_message
+        from lgt_bridge.validation import MASS_CHECK_MAX_NV, mass_defects
+        from .mass_notes import singular_mass_text
         if self.Mbar is not None:
             if self._Mbar_pd is None and self._compiled and self.ode1 is None:
                 # the kernels' pack (built for the first f anyway) inverted M̄'s blocks
@@ -458,21 +459,11 @@ class ExudynModel(StepHooks, Model):
         q2 = q[:self.n2]
         M = self._mass2(q2)
         A = self._jacobian2(q2) if self.n_constraints else None
-        d = mass_defects(M, A) or (mass_defects(M) if A is not None else [])   # M̄⁻¹ is formed
+        held = mass_defects(M, A) if A is not None else None
+        d = held or mass_defects(M)                  # M̄⁻¹ is formed: M itself must be regular
         if d:
             owners = [self.nodes.owner(self.mbs, i) for i, _ in d]
-            if any("ObjectANCFBeam " in o for o in owners):
-                # its cross-section slopes: rank 3 of 6 in M, whatever sectionData.inertia
-                fix = (" Exudyn's ObjectANCFBeam has such a mass matrix whatever its sectionData: three "
-                       "directions of the slope coordinates of each node carry no inertia. Run it with "
-                       "Exudyn's own exu.SolveDynamic (generalized-α: its iteration matrix includes the "
-                       "stiffness), or use ObjectBeamGeometricallyExact.")
-            else:
-                fix = (" Exudyn's implicit solvers (generalized-α) can run such a model, since their "
-                       "iteration matrix includes the stiffness; run it with Exudyn's own "
-                       "exu.SolveDynamic, or give these coordinates mass (an ANCF cable's or beam's "
-                       "inertia: no zero entry).")
-            raise InputError(mass_message(d, owners) + fix)
+            raise InputError(singular_mass_text(self.mbs, d, owners, held == []))
 
     # ------------------------------------------------------------------ compiled backend
     def reset_caches(self):

@@ -48,6 +48,7 @@ MODELS = {
     "offset com EP": lambda: offset_com_pendulum(em.EP),
     "offset com Rxyz": lambda: offset_com_pendulum(em.RXYZ),
     "free EP": lambda: scenes.free_bodies(3, em.EP),
+    "tree among masses": lambda: em.tree_with_masses(),
 }
 
 
@@ -123,6 +124,30 @@ def test_forces_constraint_matrix_and_solve(built, rng):
         assert solve(A, gam) == 0
         assert close(Vd, solve_kkt(Mb, A, Qb, -gam)[0])
         assert close(A @ Vd, -gam, tol=1e-10)
+
+
+def test_a_configuration_dependent_mass_matrix_is_factorized_within_its_row_envelope(rng):
+    """A KinematicTree among point masses (Exudyn's serialRobotKinematicTreeDigging.py in
+    small): M̄ depends on q, so the kernel factorizes it at every f; it does so within M̄'s row
+    envelope (row_envelope), which is that of its blocks: the point masses' rows hold their
+    diagonal only. The solve equals numpy's (with and without the constraint row)."""
+    from lgt_exudyn.kernel_solve import row_envelope
+    SC, mbs = em.tree_with_masses(4)
+    m = ExudynModel(mbs)
+    P = K.pack(m)
+    assert not P.constant_mass
+    for q, V, t in em.random_states(m, rng):
+        Mb, Qb, A, gam = m._evaluate(q, V, t)
+        env = row_envelope(np.ascontiguousarray(Mb))
+        rows = np.arange(m.nv)
+        expect = np.array([min(np.flatnonzero(Mb[i, :i + 1])) for i in rows])
+        assert np.array_equal(env, expect) and (rows - env).max() == 1    # the tree's 2 x 2 block
+        Vd = np.zeros(m.nv)
+        assert K.solve(P.T, P.off, P.w, np.ascontiguousarray(Mb), A, Qb, gam, Vd) == 0
+        assert close(Vd, solve_kkt(Mb, A, Qb, -gam)[0])
+        assert K.solve(P.T, P.off, P.w, np.ascontiguousarray(Mb), np.zeros((0, m.nv)), Qb, np.zeros(0), Vd) == 0
+        assert close(Vd, np.linalg.solve(Mb, Qb))
+        assert close(K.f_compiled(m, P, q, V, t), m.f(q, V, t), 1e-9)
 
 
 def test_gamma_difference(rng):

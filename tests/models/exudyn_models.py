@@ -193,3 +193,23 @@ def random_states(m, rng, n=3):
             continue
         out.append((q, rng.normal(size=m.nv) * 3.0, float(rng.uniform(0, 1))))
     return out
+
+
+def tree_with_masses(n_masses=3):
+    """Free mass points (the first held in y by a CoordinateConstraint) next to a two-link
+    KinematicTree pendulum, whose mass matrix depends on its joint angles (Exudyn's
+    serialRobotKinematicTreeDigging.py: a robot as a KinematicTree among particles): a
+    configuration-dependent M̄ made of small diagonal blocks and one 2 x 2 block."""
+    from exudyn.utilities import HTtranslate, InertiaRodX, TreeLink
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    masses = [mbs.CreateMassPoint(referencePosition=[1.0 + i, 0, 0], initialVelocity=[0, 0.1 * i, 0.2],
+                                  physicsMass=0.5 + i, gravity=[0, -9.81, 0]) for i in range(n_masses)]
+    mbs.CreateCoordinateConstraint(bodyNumbers=[None, masses[0]], coordinates=[None, 1])
+    L = 0.5
+    links = [TreeLink(linkInertia=InertiaRodX(1.0, L).Translated([L / 2, 0, 0]), jointType=exu.JointType.RevoluteZ,
+                      jointHT=HTtranslate([L if k else 0.0, 0, 0]), parent=k - 1) for k in range(2)]
+    mbs.CreateKinematicTree(listOfTreeLinks=links, gravity=[0, -9.81, 0], referenceCoordinates=[0.0, 0.0],
+                            initialCoordinates=[0.3, -0.4], initialCoordinates_t=[1.0, -2.0])
+    mbs.Assemble()
+    return SC, mbs
