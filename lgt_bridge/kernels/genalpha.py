@@ -146,17 +146,16 @@ def dpsi_neg(code, kind, X, out):
     for b in range(X.shape[0]):
         x0, x1, x2 = X[b, 0], X[b, 1], X[b, 2]
         phi = increment(code, x0, x1, x2)[4]
-        for k in range(m):
-            w = np.zeros(6)
-            w[k] = 1.0
-            r0, r1, r2 = rot_rates(code, x0, x1, x2, w[0], w[1], w[2], phi)
+        for k in range(m):                              # column k: the rates of the unit vector e_k
+            e0, e1, e2 = 1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0
+            e3, e4, e5 = 1.0 if k == 3 else 0.0, 1.0 if k == 4 else 0.0, 1.0 if k == 5 else 0.0
+            r0, r1, r2 = rot_rates(code, x0, x1, x2, e0, e1, e2, phi)
             M[0, k], M[1, k], M[2, k] = r0, r1, r2
             if m == 6:
                 if kind == 2:
-                    t0, t1, t2 = se3_rates(code, x0, x1, x2, X[b, 3], X[b, 4], X[b, 5], w[0], w[1], w[2],
-                                           w[3], w[4], w[5], phi)
+                    t0, t1, t2 = se3_rates(code, x0, x1, x2, X[b, 3], X[b, 4], X[b, 5], e0, e1, e2, e3, e4, e5, phi)
                 else:
-                    t0, t1, t2 = w[3], w[4], w[5]
+                    t0, t1, t2 = e3, e4, e5
                 M[3, k], M[4, k], M[5, k] = t0, t1, t2
         # block lower triangular [[A, 0], [B, C]]: inv = [[A⁻¹, 0], [-C⁻¹ B A⁻¹, C⁻¹]]
         _inv3(M, 0, 0, out[b], 0, 0)
