@@ -136,6 +136,8 @@ class Engine:
         self.ref = np.array(sd.GetODE2Coordinates(exu.ConfigurationType.Reference))
         self.ae0 = self.solver.GetODE2size() + self.solver.GetODE1size()
         self.jac_zero = np.zeros((self.ae0 + self.nae, self.ae0 + self.nae))
+        # the AE Jacobians by columns (ae_columns), by (c_pos, c_vel): absent untried, False dense
+        self._ae_columns = {}
 
     def write(self, q, qd, t):
         """Exudyn's state: coordinates q - ref, velocities qd, time t."""
@@ -158,11 +160,35 @@ class Engine:
 
     def ae_jacobian_full(self, c_pos, c_vel):
         """Exudyn's whole system Jacobian (a view) holding c_pos ∂C/∂q + c_vel ∂C/∂q̇ on its AE
-        rows, at the written coordinates."""
+        rows, at the written coordinates. ∂C/∂q of a large system comes from the columns of
+        the velocity-level residual (:mod:`.ae_columns`) where they agree with Exudyn's."""
+        key = (c_pos, c_vel) if c_pos == 1.0 and c_vel in (0.0, 1.0) else None
+        cols = self._ae_columns.get(key) if key is not None else False
+        if cols:
+            return cols.jacobian()
         S = self.solver
         S.SetSystemJacobian(self.jac_zero)
         S.ComputeJacobianAE(self.mbs, c_pos, c_vel, 0.0, False)
-        return S.GetSystemJacobian()
+        J = S.GetSystemJacobian()
+        if cols is None:
+            self._ae_columns[key] = self._probe_columns(J, c_vel == 1.0)
+        return J
+
+    def _probe_columns(self, exact, velocity_rows):
+        """An :class:`.ae_columns.AEColumns` when it agrees with ``exact`` (Exudyn's Jacobian
+        at the written state), else False (Exudyn's dense Jacobian from then on)."""
+        from . import ae_columns
+        if self.ae0 + self.nae < ae_columns.MIN_UNKNOWNS or not self.nae:
+            return False
+        rows, cols = ae_columns.structural_pattern(self, velocity_rows)
+        if not len(rows):
+            return False
+        probe = ae_columns.AEColumns(self, rows, cols)
+        try:
+            ok = probe.check(exact)
+        except Exception:                       # a residual Exudyn will not evaluate so: dense
+            ok = False
+        return probe if ok else False
 
     def ae_residual(self, q, qd, t, velocity_level, rows):
         """Exudyn's algebraic equations' residual (``velocity_level``: their velocity form)
