@@ -2,7 +2,8 @@
 
 Public for the adapters and for users who build their own loops: ``check_inputs``
 (t_span, method, tolerances, initial state), ``check_mass`` / ``mass_defects`` /
-``mass_message`` (a singular or indefinite mass matrix named by its body),
+``mass_message`` (a singular or indefinite mass matrix named by its body; ``more_directions``
+its note of further defects, for adapters' own texts),
 ``validate_bodies`` (every body's coordinates, batched per parameterization), and
 ``QUAT_NORM_TOL`` (how far a unit quaternion's norm may be from 1).
 """
@@ -243,17 +244,22 @@ def check_mass(model, q0):
 NEGATIVE_INERTIA = 1e-9
 
 
+def more_directions(defects, owners):
+    """"; n such directions, in <owners>" for a mass message naming more than one defect
+    (the first six owners), "" for one."""
+    if len(defects) <= 1:
+        return ""
+    names = list(dict.fromkeys(owners))
+    return f"; {len(defects)} such directions, in {', '.join(names[:6])}" + (", ..." if len(names) > 6 else "")
+
+
 def mass_message(defects, owners):
     """InputError text for ``mass_defects`` output; ``owners`` names each defect's index."""
     i, lam = defects[0]
     # an eigenvalue of the scaled M at rounding level is zero, whatever its sign
     negative = lam < -NEGATIVE_INERTIA
     kind = "indefinite" if negative else "singular"
-    names = list(dict.fromkeys(owners))
-    more = ""
-    if len(defects) > 1:
-        more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
-                + (", ..." if len(names) > 6 else ""))
+    more = more_directions(defects, owners)
     return (f"mass matrix at q0 is {kind}: the motion of {owners[0]} (velocity index {i}) has "
             f"{'negative' if negative else 'no'} inertia (scaled eigenvalue {lam:.2g}){more}. "
             "Its acceleration is undefined and an integrator would fail or crawl to max_steps. "

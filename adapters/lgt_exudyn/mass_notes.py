@@ -1,7 +1,7 @@
 """The refusal text for an Exudyn model whose mass matrix the bridge cannot invert
 (``ExudynModel.check_mass_matrix``): what the defect is and what to do, including the object
 kinds whose Exudyn mass matrix is singular whatever the user gives them."""
-from lgt_bridge.validation import mass_message
+from lgt_bridge.validation import mass_message, more_directions
 
 
 def singular_mass_text(mbs, defects, owners, held):
@@ -27,11 +27,7 @@ def singular_mass_text(mbs, defects, owners, held):
 
 def _held_text(defects, owners):
     i, lam = defects[0]
-    names = list(dict.fromkeys(owners))
-    more = ""
-    if len(defects) > 1:
-        more = (f"; {len(defects)} such directions, in {', '.join(names[:6])}"
-                + (", ..." if len(names) > 6 else ""))
+    more = more_directions(defects, owners)
     return (f"mass matrix at q0 is singular: a motion led by {owners[0]} (velocity index {i}) "
             f"carries no kinetic energy (scaled eigenvalue {lam:.2g}){more}. The model's constraints "
             "hold that motion (the mass matrix is positive definite on the motions they allow), so "

@@ -15,6 +15,8 @@ from exudyn.utilities import (ALECable2D, Cable2D, CoordinateConstraint, Force, 
                               NodePoint2DSlope1, NodePointGround, ObjectGround, ObjectMassPoint2D)
 from exudyn.beams import CreateReevingCurve, PointsAndSlopes2ANCFCable2D
 
+from exudyn_special_models import settings  # (the shared settings)
+
 
 def rope_over_roll(n_nodes=12, t_end=0.05, steps=100):
     """(mbs, simulationSettings): the rope of n_nodes ANCF nodes over a roll of radius 0.45 m
@@ -45,12 +47,7 @@ def rope_over_roll(n_nodes=12, t_end=0.05, steps=100):
         gc.AddANCFCable(objectIndex=o, halfHeight=0, contactStiffness=1e5, contactDamping=200, frictionMaterialIndex=0)
     gc.SetFrictionPairings(np.zeros((1, 1)))
     mbs.Assemble()
-    s = exu.SimulationSettings()
-    s.timeIntegration.endTime = t_end
-    s.timeIntegration.numberOfSteps = steps
-    s.solutionSettings.writeSolutionToFile = False
-    s.timeIntegration.verboseMode = 0
-    return mbs, s
+    return mbs, settings(t_end, steps)
 
 
 def ale_pipe(moving_mass_factor=1.0, n_elements=4, t_end=0.1, steps=100):
@@ -81,9 +78,4 @@ def ale_pipe(moving_mass_factor=1.0, n_elements=4, t_end=0.1, steps=100):
         mbs.AddObject(CoordinateConstraint(markerNumbers=[m_ground, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0],
                                                                                                       coordinate=c))]))
     mbs.Assemble()
-    s = exu.SimulationSettings()
-    s.timeIntegration.endTime = t_end
-    s.timeIntegration.numberOfSteps = steps
-    s.solutionSettings.writeSolutionToFile = False
-    s.timeIntegration.verboseMode = 0
-    return mbs, s, ale
+    return mbs, settings(t_end, steps), ale
