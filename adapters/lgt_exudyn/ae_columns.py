@@ -54,7 +54,6 @@ class AEColumns:
         keep = {}
         for r, c in zip(rows.tolist(), cols.tolist()):
             keep.setdefault(c, set()).add(r)
-        self.rows, self.cols = rows, cols
         groups, used = [], []                  # greedy colouring: no shared row within a group
         for c in sorted(keep):
             for g, u in zip(groups, used):
@@ -66,8 +65,10 @@ class AEColumns:
                 groups.append([c])
                 used.append(set(keep[c]))
         self.groups = [np.array(g, np.int64) for g in groups]
-        self.group_of = {c: i for i, g in enumerate(groups) for c in g}
-        self.entry_group = np.array([self.group_of[c] for c in cols.tolist()], np.int64)
+        group_of = {c: i for i, g in enumerate(groups) for c in g}
+        entry_group = np.array([group_of[c] for c in cols.tolist()], np.int64)
+        # per group, its entries' (rows, cols)
+        self.entries = [(rows[entry_group == i], cols[entry_group == i]) for i in range(len(groups))]
         n = engine.ae0 + engine.nae
         self.out = np.zeros((n, n))            # only the AE rows' entries are written
 
@@ -81,16 +82,15 @@ class AEColumns:
         sd.SetODE2Coordinates_t(probe)
         S.ComputeAlgebraicEquations(mbs, True)
         r0 = np.array(S.GetSystemResidual())
-        out, rows, cols = self.out, self.rows, self.cols
+        out = self.out
         try:
-            for i, g in enumerate(self.groups):
+            for g, (rows, cols) in zip(self.groups, self.entries):
                 probe[g] = 1.0
                 sd.SetODE2Coordinates_t(probe)
                 S.ComputeAlgebraicEquations(mbs, True)
                 r = np.array(S.GetSystemResidual())
                 probe[g] = 0.0
-                sel = self.entry_group == i
-                out[rows[sel], cols[sel]] = r[rows[sel]] - r0[rows[sel]]
+                out[rows, cols] = r[rows] - r0[rows]
         finally:
             sd.SetODE2Coordinates_t(vel)
         return out
