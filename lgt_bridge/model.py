@@ -214,6 +214,13 @@ class Model:
         step): a model may bind what stays the same. Default: the bound method itself."""
         return self.forces_and_constraints
 
+    def constraint_jacobian_function(self):
+        """A callable q -> ``constraint_jacobian(q)`` for a caller that evaluates it right after
+        ``forces_and_constraints`` at the same q (generalized-α's Newton updates, asked once
+        per step): a model may bind what stays the same, and an engine need not write the
+        state again. Default: the bound method itself."""
+        return self.constraint_jacobian
+
     #: the mass matrix when it is the same at every q (dense or scipy.sparse), else None:
     #: generalized-α then keeps its residual in forces, M V̇ - Q + Aᵀλ, with one product by it
     constant_mass = None

@@ -67,8 +67,9 @@ class SparseRows:
         """A as a dense nc x nv array (from ``aval``; kept for constant rows)."""
         if self.constant and getattr(self, "_dense", None) is not None:
             return self._dense.copy()
-        A = np.zeros((nc, nv))
-        np.add.at(A, (self.rows, self.acol), self.aval)
+        # (the pattern's entries summed where two fall on one place, in their order, as
+        # np.add.at sums them: one call of ~1 µs instead of ~3 µs a Newton update)
+        A = np.bincount(self.flat, weights=self.aval, minlength=nc * nv).reshape(nc, nv)
         if self.constant:
             self._dense = A.copy()
         return A

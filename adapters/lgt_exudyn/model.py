@@ -21,7 +21,7 @@ from .constraints import ConstraintRows
 from .engine import Engine, engine_call, engine_set_up, guarded_f
 from .layout import constant_twist_mass, node_layout
 from .hooks import StepHooks, has_prestep
-from .iteration import newton_matrix, residual_function
+from .iteration import jacobian_function, newton_matrix, residual_function
 from .ode1 import ODE1States
 
 #: velocities above which M̄⁻¹ is kept sparse (the inverses of its diagonal blocks)
@@ -340,6 +340,9 @@ class ExudynModel(StepHooks, Model):
 
     def forces_and_constraints_function(self):
         return residual_function(self) or self.forces_and_constraints
+
+    def constraint_jacobian_function(self):
+        return jacobian_function(self) or self.constraint_jacobian
 
     def solve_mass(self, q, B):
         """M̄⁻¹ B: through the cached inverse when the twist mass matrix is constant."""

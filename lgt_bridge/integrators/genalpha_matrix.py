@@ -301,6 +301,7 @@ def _dense_solver(J, L):
             x = np.array(r, dtype=float).reshape(len(A), -1)
             dense_lu_solve(A, piv, x)
             return x.reshape(np.shape(r))
+        solve.dense_factors = (A, piv)      # for kernels that solve inside (genalpha)
         return solve
     X = np.array(L.toarray() if sparse.issparse(L) else L, dtype=float, order="C")
     dense_lu_solve(A, piv, X)

@@ -2,11 +2,13 @@
 step), its matrix kept or refreshed as :func:`.newton_control.verdict` says.
 
 Two loops over the same updates:
-* :func:`_fused`: the residual in forces with a constant M̄, position-level constraints and a
-  sparse LU with compiled factors: per update one model call for (Q, g) and one kernel for
-  the residual, the solve, the update and the state at the new Ẇ (``ga_force_newton``); what
-  stays the same through the step (the state's affine parts, the model's
-  ``forces_and_constraints_function``, A when constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
+* :func:`_fused`: the residual in forces with a constant M̄, position-level constraints and an
+  LU with compiled factors (sparse, or dense on small models): per update one model call for
+  (Q, g), one for A unless constant, and one kernel for the residual, the solve, the update
+  and the state at the new Ẇ (``ga_force_newton``, ``ga_force_newton_dense``); what stays
+  the same through the step (the state's affine parts, the model's
+  ``forces_and_constraints_function`` and ``constraint_jacobian_function``, A when
+  constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
   ~20 µs (9 µs of them Exudyn's own force evaluation), each lookup saved counts.
 * :func:`_general`: every other residual form, through ``GenAlpha._residual`` and the
   stored solver.
@@ -29,7 +31,7 @@ def iterate(ga, Wd1, lam, t1, h, tol, floor):
 
 
 def _fused(ga, Wd1, lam, t1, h, tol, floor):
-    ga_force_newton = _KERNEL[0] if _KERNEL else _kernel()
+    kernels = _KERNELS or _kernels()
     prob, m, n = ga.prob, ga.prob.model, len(Wd1)
     z = np.concatenate([Wd1, lam])
     r = np.empty(len(z))
@@ -43,8 +45,10 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
     moved, q1, V1 = prob.ga_state_args(*at)          # the kernel leaves the state at its new Ẇ
     fc = getattr(m, "forces_and_constraints_function", None)
     forces_and_constraints, head = (fc() if fc else m.forces_and_constraints), (*ga._Mcsr, A)
+    jf = getattr(m, "constraint_jacobian_function", None)
+    jacobian = jf() if jf is not None and A is None else ga._A      # (right after forces_and_constraints)
     sizes, since = [], []         # the step's update sizes; those since the last refresh
-    factors = getattr(ga._solve, "factors", None)
+    factors, kernel = _factors(ga._solve, kernels)
     tail = None if factors is None else (cg, *factors, z, r, *moved)
     state(Wd1, *at)
     z_before = np.empty_like(z)
@@ -54,8 +58,8 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
             prob.n_f += 1
             Q, g = forces_and_constraints(q1, V1, t1)
             if A is None:
-                head = (*ga._Mcsr, np.asarray(ga._A(q1), dtype=float))
-            d2 = ga_force_newton(*head, Q, g, *tail)
+                head = (*ga._Mcsr, np.asarray(jacobian(q1), dtype=float))
+            d2 = kernel(*head, Q, g, *tail)
             if d2 < 0.0:
                 ga._why = "diverged (non-finite residual)"
                 return None
@@ -80,21 +84,31 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
                 z[:] = z_before
             ga._jacobian(Wd1, lam, t1, h)
             since = []
-            factors = getattr(ga._solve, "factors", None)
+            factors, kernel = _factors(ga._solve, kernels)
             tail = None if factors is None else (cg, *factors, z, r, *moved)
             state(Wd1, *at)               # (the matrix may have used the work array)
     return _not_converged(ga, sizes, tol, floor)
 
 
-_KERNEL = []
+_KERNELS = []
 
 
-def _kernel():
-    """The fused update kernel, imported on the first use (numba stays unloaded on the numpy
-    backend) and kept: an import statement costs ~0.7 µs a step."""
-    from ..kernels.genalpha import ga_force_newton
-    _KERNEL.append(ga_force_newton)
-    return ga_force_newton
+def _kernels():
+    """The fused update kernels (sparse LU, dense LU), imported on the first use (numba stays
+    unloaded on the numpy backend) and kept: an import statement costs ~0.7 µs a step."""
+    from ..kernels.genalpha import ga_force_newton, ga_force_newton_dense
+    _KERNELS.extend((ga_force_newton, ga_force_newton_dense))
+    return _KERNELS
+
+
+def _factors(solve, kernels):
+    """(the factors a fused kernel solves with, that kernel), or (None, None) for a solver
+    without compiled factors (per-block inverses)."""
+    factors = getattr(solve, "factors", None)
+    if factors is not None:
+        return factors, kernels[0]
+    factors = getattr(solve, "dense_factors", None)
+    return (None, None) if factors is None else (factors, kernels[1])
 
 
 def _general(ga, Wd1, lam, t1, h, tol, floor):

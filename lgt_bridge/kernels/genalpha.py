@@ -67,17 +67,10 @@ def csr_matvec(indptr, indices, data, x, out):
         out[i] = acc
 
 
-@njit(cache=True, error_model="numpy")
-def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
-                    sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
-    """One Newton update of generalized-α's residual in forces with a constant mass matrix
-    (CSR ``mp, mi, mv``) and no SE(3) body: r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (A
-    dense, nc x n), then z -= J⁻¹ r with the sparse LU factors of J (:func:`.linalg.lu_solve`'s
-    arguments), then the state at the new Ẇ into the work array (:func:`ga_state`'s
-    arguments after Ẇ: the next update's model call reads it; one kernel call less an
-    update). Returns |ΔẆ|², or -1 when r is not finite (z and the state untouched). The
-    numpy reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
-    tests hold them equal."""
+@njit(cache=True, error_model="numpy", inline="always")
+def _force_residual(mp, mi, mv, A, Q, g, cg, z, r):
+    """r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (M̄ in CSR ``mp, mi, mv``, A dense nc x n);
+    returns |r|² (not finite when r is not)."""
     n, nc = Q.shape[0], g.shape[0]
     s = 0.0
     for i in range(n):
@@ -91,16 +84,66 @@ def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
     for k in range(nc):
         r[n + k] = cg * g[k]
         s += r[n + k] * r[n + k]
-    if not math.isfinite(s):
-        return -1.0
-    m = n + nc
-    dz = np.empty(m)
-    lu_solve(lp, li, lv, up, ui, uv, perm, r, dz)
+    return s
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _step_by(z, dz, n):
+    """z -= dz; returns |dz[:n]|² (the update of Ẇ)."""
     d2 = 0.0
-    for i in range(m):
+    for i in range(z.shape[0]):
         z[i] -= dz[i]
         if i < n:
             d2 += dz[i] * dz[i]
+    return d2
+
+
+@njit(cache=True, error_model="numpy")
+def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
+                    sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
+    """One Newton update of generalized-α's residual in forces with a constant mass matrix
+    (CSR ``mp, mi, mv``) and no SE(3) body: r = [M̄ Ẇ - Q + Aᵀλ; cg g] at z = (Ẇ, λ) (A
+    dense, nc x n), then z -= J⁻¹ r with the sparse LU factors of J (:func:`.linalg.lu_solve`'s
+    arguments), then the state at the new Ẇ into the work array (:func:`ga_state`'s
+    arguments after Ẇ: the next update's model call reads it; one kernel call less an
+    update). Returns |ΔẆ|², or -1 when r is not finite (z and the state untouched). The
+    numpy reference is GenAlpha._force_rows and the solver of ``genalpha_matrix.factorize``;
+    tests hold them equal."""
+    n = Q.shape[0]
+    if not math.isfinite(_force_residual(mp, mi, mv, A, Q, g, cg, z, r)):
+        return -1.0
+    dz = np.empty(z.shape[0])
+    lu_solve(lp, li, lv, up, ui, uv, perm, r, dz)
+    d2 = _step_by(z, dz, n)
+    ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
+    return d2
+
+
+@njit(cache=True, error_model="numpy")
+def ga_force_newton_dense(mp, mi, mv, A, Q, g, cg, LU, piv, z, r, sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
+    """:func:`ga_force_newton` with the dense LU factors of J (:func:`.linalg.dense_lu`: a
+    Newton matrix of at most ``genalpha_matrix.DENSE_MAX`` unknowns, a small constrained model
+    such as a pendulum, whose updates were ~30 µs of Python around ~4 µs of Exudyn): the
+    solve is :func:`.linalg.dense_lu_solve`'s arithmetic for one right-hand side."""
+    n, m = Q.shape[0], z.shape[0]
+    if not math.isfinite(_force_residual(mp, mi, mv, A, Q, g, cg, z, r)):
+        return -1.0
+    dz = r.copy()
+    for k in range(m):
+        p = piv[k]
+        if p != k:
+            dz[k], dz[p] = dz[p], dz[k]
+    for i in range(m):
+        s = dz[i]
+        for j in range(i):
+            s -= LU[i, j] * dz[j]
+        dz[i] = s
+    for i in range(m - 1, -1, -1):
+        s = dz[i]
+        for j in range(i + 1, m):
+            s -= LU[i, j] * dz[j]
+        dz[i] = s / LU[i, i]
+    d2 = _step_by(z, dz, n)
     ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
     return d2
 

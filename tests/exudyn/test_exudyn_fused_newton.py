@@ -1,0 +1,68 @@
+"""Generalized-α's Newton updates on small constrained Exudyn models in one kernel: a dense
+LU of at most DENSE_MAX unknowns solved inside the fused update (``ga_force_newton_dense``),
+and A(q) of closed-form joint rows without writing the state again
+(``constraint_jacobian_function``). References: the numpy backend's run of the same script
+(the residual rows of ``GenAlpha._force_rows``, scipy's LU), the model's own
+``constraint_jacobian``, and ``np.add.at`` for the dense A of a pattern."""
+import warnings
+
+import numpy as np
+import pytest
+
+exu = pytest.importorskip("exudyn")
+
+from lgt_bridge.integrators import genalpha_newton  # noqa: E402
+from lgt_bridge.simulate import simulate  # noqa: E402
+from lgt_exudyn.model import ExudynModel  # noqa: E402
+
+import exudyn_solver_models as sm  # noqa: E402
+
+
+def _model(build, backend):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ExudynModel(build()[0], backend=backend)
+
+
+@pytest.mark.parametrize("name,build", [
+    ("pendulum (EP node, revolute joint)", sm.pendulum),
+    ("3-link chain (EP nodes, spherical joints)", lambda: sm.rigid_chain(n=3, t_end=0.1, steps=50)),
+])
+def test_the_fused_dense_newton_update_runs_the_numpy_backends_steps(name, build, monkeypatch):
+    """50 steps of 2 ms through the compiled backend, whose updates run in the dense fused
+    kernel (counted), against the numpy backend's residual and LU: the same states to
+    rounding, the same number of Newton updates."""
+    calls = []
+    kernels = genalpha_newton._kernels() if not genalpha_newton._KERNELS else genalpha_newton._KERNELS
+    dense = kernels[1]
+
+    def counted(*args):
+        calls.append(1)
+        return dense(*args)
+    monkeypatch.setattr(genalpha_newton, "_KERNELS", [kernels[0], counted])
+    fast = simulate(_model(build, "numba"), (0.0, 0.1), method="genalpha", dt=2e-3)
+    assert len(calls) == fast.stats["n_newton"] > 50, (len(calls), fast.stats)
+    monkeypatch.setenv("LGT_BRIDGE_BACKEND", "numpy")       # the reference: no kernel anywhere
+    ref = simulate(_model(build, "numpy"), (0.0, 0.1), method="genalpha", dt=2e-3)
+    assert len(calls) == fast.stats["n_newton"]
+    assert fast.success and ref.success
+    assert fast.stats["n_newton"] == ref.stats["n_newton"]
+    assert np.abs(fast.q[-1] - ref.q[-1]).max() <= 1e-12 * max(1.0, np.abs(ref.q[-1]).max())
+    assert np.abs(fast.V[-1] - ref.V[-1]).max() <= 1e-10 * max(1.0, np.abs(ref.V[-1]).max())
+
+
+def test_the_bound_jacobian_is_the_models_constraint_jacobian(rng):
+    """``constraint_jacobian_function`` of closed-form joint rows at states off the motion:
+    equal to ``constraint_jacobian`` (which writes the state and goes through the model's
+    checks), and to A scattered by np.add.at from its pattern."""
+    m = _model(lambda: sm.rigid_chain(n=3), "numba")
+    jac = m.constraint_jacobian_function()
+    assert jac != m.constraint_jacobian                  # (the bound function, not the method)
+    sp = m._pack().sp
+    for _ in range(3):
+        q = m.q0 + 0.1 * rng.normal(size=len(m.q0))
+        A = jac(q)
+        assert np.array_equal(A, m.constraint_jacobian(q))
+        ref = np.zeros_like(A)
+        np.add.at(ref, (sp.rows, sp.acol), sp.aval)
+        assert np.array_equal(A, ref)
