@@ -303,8 +303,9 @@ def residual_function(model):
     residual read), with what stays the same looked up once (~2 µs less a call; the ANCF cable
     pendulum's generalized-α makes 6400 of them); Exudyn's exceptions become ModelErrors as
     there. Kept on the model for its solver, kernel tables and constraint rows; None where the
-    method takes another path."""
-    if not model.n_constraints or model.ode1 is not None or not model._compiled:
+    method takes another path. Without constraints: Q̄ and an empty g, Exudyn's algebraic
+    equations not asked."""
+    if model.ode1 is not None or not model._compiled:
         return None
     P, S, cons = model._pack(), model.solver, model.cons
     if not P.constant_mass:
@@ -317,6 +318,7 @@ def residual_function(model):
     ode2, ae, residual, set_time = S.ComputeODE2RHS, S.ComputeAlgebraicEquations, S.GetSystemResidual, sd.SetTime
     T, off, w, qpos, qvel, empty = P.T, P.off, P.w, P.qpos, P.qvel, P.empty
     contiguous, rows = np.ascontiguousarray, cons.engine.ae0 + cons.ae_keep
+    constrained, none = bool(model.n_constraints), np.zeros(0)
 
     def evaluate(q, V, t):
         q, V = contiguous(q, float), contiguous(V, float)
@@ -324,12 +326,18 @@ def residual_function(model):
             write(T, off, w, q, V, 0.0, qpos, qvel)
             set_time(t)
             ode2(mbs)
-            ae(mbs, False)                  # the AE rows of the residual (its ODE2 rows stay)
+            if constrained:
+                ae(mbs, False)              # the AE rows of the residual (its ODE2 rows stay)
             res = residual()
             Q = np.empty(nv)
             forces(T, off, w, q, V, res, empty, Q, empty)
             # g: the kept rows, unless rows are velocity-level or ramped (of_residual's cases)
-            g = res[rows] if not cons.nonholonomic and cons.ramp is None else of_residual(res, t)
+            if not constrained:
+                g = none
+            elif not cons.nonholonomic and cons.ramp is None:
+                g = res[rows]
+            else:
+                g = of_residual(res, t)
         except Exception as exc:
             err = engine_error(sd, "forces_and_constraints", exc)
             if err is None:

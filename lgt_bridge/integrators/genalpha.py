@@ -111,7 +111,7 @@ class GenAlpha(Stepper):
         # the residual in accelerations, or in forces (see the module docstring); in forces
         # with one product by a constant M̄ (no SE(3) body: V̇ = Ẇ)
         self._Mc = self._Mcsr = None
-        if self.nc and not self.rotate_rows and m.constant_mass is not None:
+        if not self.rotate_rows and m.constant_mass is not None:
             from .genalpha_matrix import _csr_product
             from scipy.sparse import csr_matrix
             Mc = csr_matrix(m.constant_mass)
@@ -119,7 +119,7 @@ class GenAlpha(Stepper):
             if problem.compiled:
                 self._Mcsr = (Mc.indptr.astype(np.int64), Mc.indices.astype(np.int64),
                               np.ascontiguousarray(Mc.data, dtype=float))
-        self.accel_form = not self.nc or (self._Mc is None and type(m).solve_mass is not Model.solve_mass)
+        self.accel_form = self._Mc is None and (not self.nc or type(m).solve_mass is not Model.solve_mass)
         self.analytic = self.use_M and callable(getattr(m, "iteration_matrix", None))
         self._lam_kw = self.analytic and accepts(m.iteration_matrix, "lam")
         self._sparse_kw = self.analytic and accepts(m.iteration_matrix, "sparse")
@@ -219,13 +219,13 @@ class GenAlpha(Stepper):
         prob, m = self.prob, self.prob.model
         q1, V1, quats, W1 = self._evaluate(Wd1, h)
         prob.n_f += 1
+        if self._Mc is not None:
+            return self._force_rows(q1, V1, Wd1, lam, t1, h)
         if not self.nc:
             # the model's f sees the kernel's buffers, as in the explicit methods' stages
             r = np.empty(len(Wd1))
             self._finite = math.isfinite(prob.ga_residual(m.f(q1, V1, t1), Wd1, r, W1, quats))
             return r
-        if self._Mc is not None:
-            return self._force_rows(q1, V1, Wd1, lam, t1, h)
         q1, V1, quats, W1 = q1.copy(), V1.copy(), quats.copy(), W1.copy()
         A = self._A(q1)
         Q = m.forces(q1, V1, t1) - A.T @ lam

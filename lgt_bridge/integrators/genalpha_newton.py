@@ -38,7 +38,7 @@ def _fused(ga, Wd1, lam, t1, h, tol, floor):
     Wd1, lam = z[:n], z[n:]
     cg = 1.0 / (h * h * ga.beta)
     A = ga._A_fixed
-    if A is None and ga._A_const:
+    if A is None and (ga._A_const or not ga.nc):
         A = ga._A_fixed = np.asarray(ga._A(ga.q), dtype=float)
     c = ga._affine(h)
     state, at = prob.ga_state, (c.s_v, c.sp, c.W0, c.dX0, ga._to_local)

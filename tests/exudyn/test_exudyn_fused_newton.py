@@ -27,6 +27,7 @@ def _model(build, backend):
 @pytest.mark.parametrize("name,build", [
     ("pendulum (EP node, revolute joint)", sm.pendulum),
     ("3-link chain (EP nodes, spherical joints)", lambda: sm.rigid_chain(n=3, t_end=0.1, steps=50)),
+    ("stiff spring chain (5 mass points, no constraints)", lambda: sm.stiff_spring_chain(damping=1e5)),
 ])
 def test_the_fused_dense_newton_update_runs_the_numpy_backends_steps(name, build, monkeypatch):
     """50 steps of 2 ms through the compiled backend, whose updates run in the dense fused
@@ -66,3 +67,21 @@ def test_the_bound_jacobian_is_the_models_constraint_jacobian(rng):
         ref = np.zeros_like(A)
         np.add.at(ref, (sp.rows, sp.acol), sp.aval)
         assert np.array_equal(A, ref)
+
+
+def test_without_constraints_the_residual_in_forces_takes_the_acceleration_forms_steps(monkeypatch):
+    """A constant M̄ and no constraints: generalized-α's residual in forces, M̄ Ẇ - Q (the fused
+    kernel's), against the residual in accelerations, Ẇ - M̄⁻¹Q with the matrix J⁻¹M̄ (the
+    path taken when the model gives no constant mass matrix). Newton's updates are the same in
+    exact arithmetic, so are the steps: the same updates and matrices, states to rounding."""
+    runs = []
+    for form in ("forces", "accelerations"):
+        if form == "accelerations":
+            monkeypatch.setattr(ExudynModel, "constant_mass", property(lambda self: None))
+        runs.append(simulate(_model(lambda: sm.stiff_spring_chain(damping=1e5), "numba"), (0.0, 0.2),
+                             method="genalpha", dt=1e-2))
+    forces, accel = runs
+    assert forces.success and accel.success
+    assert forces.stats["n_newton"] == accel.stats["n_newton"] and forces.stats["n_jacobians"] == accel.stats["n_jacobians"]
+    assert np.abs(forces.q[-1] - accel.q[-1]).max() <= 1e-12 * max(1.0, np.abs(accel.q[-1]).max())
+    assert np.abs(forces.V[-1] - accel.V[-1]).max() <= 1e-9 * max(1.0, np.abs(accel.V[-1]).max())
