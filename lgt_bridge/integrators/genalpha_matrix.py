@@ -387,6 +387,7 @@ def _csr_product(S):
         out = np.empty(n)
         csr_matvec(ip, ix, data, np.ascontiguousarray(r, dtype=float), out)
         return out
+    product.csr = (ip, ix, data)        # for kernels that solve inside (genalpha)
     return product
 
 

@@ -2,14 +2,14 @@
 step), its matrix kept or refreshed as :func:`.newton_control.verdict` says.
 
 Two loops over the same updates:
-* :func:`_fused`: the residual in forces with a constant M̄, position-level constraints and an
-  LU with compiled factors (sparse, or dense on small models): per update one model call for
-  (Q, g), one for A unless constant, and one kernel for the residual, the solve, the update
-  and the state at the new Ẇ (``ga_force_newton``, ``ga_force_newton_dense``); what stays
-  the same through the step (the state's affine parts, the model's
-  ``forces_and_constraints_function`` and ``constraint_jacobian_function``, A when
-  constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost
-  ~20 µs (9 µs of them Exudyn's own force evaluation), each lookup saved counts.
+* :func:`_fused`: the residual in forces with a constant M̄, position-level constraints (or
+  none) and a solver with compiled parts (sparse or dense LU factors, or J⁻¹ by blocks): per
+  update one model call for (Q, g), one for A unless constant, and one kernel for the
+  residual, the solve, the update and the state at the new Ẇ (``ga_force_newton``,
+  ``_dense``, ``_csr``); what stays the same through the step (the state's affine parts, the
+  model's ``forces_and_constraints_function`` and ``constraint_jacobian_function``, A when
+  constant) is looked up once. On the 104-coordinate ANCF cable, whose updates cost ~20 µs
+  (9 µs of them Exudyn's own force evaluation), each lookup saved counts.
 * :func:`_general`: every other residual form, through ``GenAlpha._residual`` and the
   stored solver.
 The step converges on the velocity change h·ΔẆ (RMS): Ẇ itself carries rounding noise of
@@ -96,19 +96,19 @@ _KERNELS = []
 def _kernels():
     """The fused update kernels (sparse LU, dense LU), imported on the first use (numba stays
     unloaded on the numpy backend) and kept: an import statement costs ~0.7 µs a step."""
-    from ..kernels.genalpha import ga_force_newton, ga_force_newton_dense
-    _KERNELS.extend((ga_force_newton, ga_force_newton_dense))
+    from ..kernels.genalpha import ga_force_newton, ga_force_newton_csr, ga_force_newton_dense
+    _KERNELS.extend((ga_force_newton, ga_force_newton_dense, ga_force_newton_csr))
     return _KERNELS
 
 
 def _factors(solve, kernels):
-    """(the factors a fused kernel solves with, that kernel), or (None, None) for a solver
-    without compiled factors (per-block inverses)."""
-    factors = getattr(solve, "factors", None)
-    if factors is not None:
-        return factors, kernels[0]
-    factors = getattr(solve, "dense_factors", None)
-    return (None, None) if factors is None else (factors, kernels[1])
+    """(what a fused kernel solves with, that kernel): sparse LU factors, dense LU factors or
+    J⁻¹ as CSR (per-block inverses); (None, None) for a solver with none of them."""
+    for k, name in enumerate(("factors", "dense_factors", "csr")):
+        factors = getattr(solve, name, None)
+        if factors is not None:
+            return factors, kernels[k]
+    return None, None
 
 
 def _general(ga, Wd1, lam, t1, h, tol, floor):

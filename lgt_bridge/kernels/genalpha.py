@@ -148,6 +148,21 @@ def ga_force_newton_dense(mp, mi, mv, A, Q, g, cg, LU, piv, z, r, sv, sp, Wa, dX
     return d2
 
 
+@njit(cache=True, error_model="numpy")
+def ga_force_newton_csr(mp, mi, mv, A, Q, g, cg, sp, si, sv_, z, r, sv, sp_, Wa, dXa, tl, w, bt, vt, off, kin):
+    """:func:`ga_force_newton` with J⁻¹ itself as a CSR matrix (``sp, si, sv_``: J falls apart
+    into small blocks, inverted one by one: free bodies, ``genalpha_matrix._block_inverse``):
+    the solve is a product (:func:`csr_matvec`'s arithmetic)."""
+    n = Q.shape[0]
+    if not math.isfinite(_force_residual(mp, mi, mv, A, Q, g, cg, z, r)):
+        return -1.0
+    dz = np.empty(z.shape[0])
+    csr_matvec(sp, si, sv_, r, dz)
+    d2 = _step_by(z, dz, n)
+    ga_state(z[:n], sv, sp_, Wa, dXa, tl, w, bt, vt, off, kin)
+    return d2
+
+
 @njit("void(float64[::1], float64[::1], float64, float64[::1])", cache=True, error_model="numpy")
 def predict(x, x_prev, alternating, out):
     """out = 2 x - x_prev, but 0 where x and x_prev have opposite signs and both exceed

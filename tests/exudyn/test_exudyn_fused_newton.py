@@ -1,5 +1,7 @@
-"""Generalized-α's Newton updates on small constrained Exudyn models in one kernel: a dense
-LU of at most DENSE_MAX unknowns solved inside the fused update (``ga_force_newton_dense``),
+"""Generalized-α's Newton updates on small Exudyn models with a constant mass matrix in one
+kernel: a dense LU of at most DENSE_MAX unknowns solved inside the fused update
+(``ga_force_newton_dense``), or J⁻¹ by blocks as a CSR product (``ga_force_newton_csr``);
+the residual in forces without constraints as well;
 and A(q) of closed-form joint rows without writing the state again
 (``constraint_jacobian_function``). References: the numpy backend's run of the same script
 (the residual rows of ``GenAlpha._force_rows``, scipy's LU), the model's own
@@ -13,6 +15,7 @@ exu = pytest.importorskip("exudyn")
 
 from lgt_bridge.integrators import genalpha_newton  # noqa: E402
 from lgt_bridge.simulate import simulate  # noqa: E402
+from lgt_exudyn import scenes  # noqa: E402
 from lgt_exudyn.model import ExudynModel  # noqa: E402
 
 import exudyn_solver_models as sm  # noqa: E402
@@ -24,25 +27,28 @@ def _model(build, backend):
         return ExudynModel(build()[0], backend=backend)
 
 
-@pytest.mark.parametrize("name,build", [
-    ("pendulum (EP node, revolute joint)", sm.pendulum),
-    ("3-link chain (EP nodes, spherical joints)", lambda: sm.rigid_chain(n=3, t_end=0.1, steps=50)),
-    ("stiff spring chain (5 mass points, no constraints)", lambda: sm.stiff_spring_chain(damping=1e5)),
+@pytest.mark.parametrize("name,build,solver", [
+    ("pendulum (EP node, revolute joint)", sm.pendulum, "dense"),
+    ("3-link chain (EP nodes, spherical joints)", lambda: sm.rigid_chain(n=3, t_end=0.1, steps=50), "dense"),
+    ("stiff spring chain (5 mass points, no constraints)", lambda: sm.stiff_spring_chain(damping=1e5), "dense"),
+    ("12 free RotVecLG bodies (J inverted block by block)", lambda: (scenes.free_bodies(12)[1],), "csr"),
 ])
-def test_the_fused_dense_newton_update_runs_the_numpy_backends_steps(name, build, monkeypatch):
-    """50 steps of 2 ms through the compiled backend, whose updates run in the dense fused
-    kernel (counted), against the numpy backend's residual and LU: the same states to
-    rounding, the same number of Newton updates."""
+def test_the_fused_newton_updates_run_the_numpy_backends_steps(name, build, solver, monkeypatch):
+    """50 steps of 2 ms through the compiled backend, whose updates run in one fused kernel
+    (the dense-LU one, or the block inverse's CSR product; counted), against the numpy
+    backend's residual and solves: the same states to rounding, the same number of updates."""
     calls = []
-    kernels = genalpha_newton._kernels() if not genalpha_newton._KERNELS else genalpha_newton._KERNELS
-    dense = kernels[1]
+    kernels = list(genalpha_newton._KERNELS or genalpha_newton._kernels())
 
-    def counted(*args):
-        calls.append(1)
-        return dense(*args)
-    monkeypatch.setattr(genalpha_newton, "_KERNELS", [kernels[0], counted])
+    def counted(k):
+        def kernel(*args):
+            calls.append(k)
+            return kernels[k](*args)
+        return kernel
+    monkeypatch.setattr(genalpha_newton, "_KERNELS", [counted(k) for k in range(len(kernels))])
     fast = simulate(_model(build, "numba"), (0.0, 0.1), method="genalpha", dt=2e-3)
     assert len(calls) == fast.stats["n_newton"] > 50, (len(calls), fast.stats)
+    assert set(calls) == {{"dense": 1, "csr": 2}[solver]}
     monkeypatch.setenv("LGT_BRIDGE_BACKEND", "numpy")       # the reference: no kernel anywhere
     ref = simulate(_model(build, "numpy"), (0.0, 0.1), method="genalpha", dt=2e-3)
     assert len(calls) == fast.stats["n_newton"]
