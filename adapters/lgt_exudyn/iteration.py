@@ -350,24 +350,41 @@ def residual_function(model):
 
 
 def jacobian_function(model):
-    """q ↦ A(q) as ``ExudynModel.constraint_jacobian`` gives it, for rows in closed form
-    (:func:`.kernel_sparse.joint_rows`, then A dense from its pattern), with the lookups bound
-    and without writing the state first (``constraint_jacobian_function``: its caller has
-    just written it; the rows read q alone): on a pendulum's Newton update 6 µs -> 2 µs.
-    None where A takes another path (Exudyn's Jacobian, constant rows)."""
+    """q ↦ A(q) as ``ExudynModel.constraint_jacobian`` gives it, with the lookups bound and
+    without writing the state first (``constraint_jacobian_function``: its caller has just
+    written it at q): rows in closed form (:func:`.kernel_sparse.joint_rows`, then A dense from
+    its pattern; on a pendulum's Newton update 6 µs -> 2 µs), else Exudyn's AE Jacobian at the
+    written state mapped to twists. Exudyn's exceptions become ModelErrors. None where A is
+    constant or the model takes another path (ODE1 states, the numpy backend)."""
     if not model.n_constraints or model.ode1 is not None or not model._compiled:
         return None
     P = model._pack()
     sp = P.sp
-    if sp is None or sp.joints is None or sp.constant:
+    if sp is not None and sp.constant:
         return None
-    rows, T, ja, jb, aval, gam = model._kernels.joint_rows, P.T, sp.joints[0], sp.joints[1], sp.aval, P.gam
-    dense, nc, nv, zero, contiguous = sp.dense, model.n_constraints, P.nv, np.zeros(P.nv), np.ascontiguousarray
+    T, nc, nv, contiguous = P.T, model.n_constraints, P.nv, np.ascontiguousarray
+    if sp is not None and sp.joints is not None:
+        rows, ja, jb, aval, gam = model._kernels.joint_rows, sp.joints[0], sp.joints[1], sp.aval, P.gam
+        dense, zero = sp.dense, np.zeros(P.nv)
 
-    def jacobian(q):
-        rows(T, contiguous(q, float), zero, ja, jb, aval, gam)
-        return dense(nc, nv)
-    return jacobian
+        def jacobian(q):
+            rows(T, contiguous(q, float), zero, ja, jb, aval, gam)
+            return dense(nc, nv)
+        return jacobian
+    matrix, engine, off, w, kept = model._kernels.constraint_matrix, model.engine, P.off, P.w, P.rows
+    c_vel, sd = 1.0 if model.cons.nonholonomic else 0.0, model.sd
+
+    def jacobian_from_exudyn(q):
+        A = np.empty((nc, nv))
+        try:
+            matrix(T, off, w, contiguous(q, float), engine.ae_jacobian_full(1.0, c_vel), kept, A)
+        except Exception as exc:
+            err = engine_error(sd, "constraint_jacobian", exc)
+            if err is None:
+                raise
+            raise err from exc
+        return A
+    return jacobian_from_exudyn
 
 
 def _compiled_parts(model, q, V, t, sparse):

@@ -2,7 +2,7 @@
 kernel: a dense LU of at most DENSE_MAX unknowns solved inside the fused update
 (``ga_force_newton_dense``), or J⁻¹ by blocks as a CSR product (``ga_force_newton_csr``);
 the residual in forces without constraints as well;
-and A(q) of closed-form joint rows without writing the state again
+and A(q) without writing the state again
 (``constraint_jacobian_function``). References: the numpy backend's run of the same script
 (the residual rows of ``GenAlpha._force_rows``, scipy's LU), the model's own
 ``constraint_jacobian``, and ``np.add.at`` for the dense A of a pattern."""
@@ -19,6 +19,7 @@ from lgt_exudyn import scenes  # noqa: E402
 from lgt_exudyn.model import ExudynModel  # noqa: E402
 
 import exudyn_solver_models as sm  # noqa: E402
+import exudyn_special_models as esm  # noqa: E402
 
 
 def _model(build, backend):
@@ -58,21 +59,29 @@ def test_the_fused_newton_updates_run_the_numpy_backends_steps(name, build, solv
     assert np.abs(fast.V[-1] - ref.V[-1]).max() <= 1e-10 * max(1.0, np.abs(ref.V[-1]).max())
 
 
-def test_the_bound_jacobian_is_the_models_constraint_jacobian(rng):
-    """``constraint_jacobian_function`` of closed-form joint rows at states off the motion:
-    equal to ``constraint_jacobian`` (which writes the state and goes through the model's
-    checks), and to A scattered by np.add.at from its pattern."""
-    m = _model(lambda: sm.rigid_chain(n=3), "numba")
+@pytest.mark.parametrize("name,build", [
+    ("3-link chain: spherical joints' rows in closed form", lambda: sm.rigid_chain(n=3)),
+    ("RigidBody2D double pendulum: Exudyn's AE Jacobian of JointRevolute2D", esm.rigid2d_double_pendulum),
+])
+def test_the_bound_jacobian_is_the_models_constraint_jacobian(name, build, rng):
+    """``constraint_jacobian_function`` at states off the motion, each written first as its
+    caller (the fused Newton update) writes it: equal to ``constraint_jacobian`` (which writes
+    the state itself and goes through the model's checks) and, for closed-form rows, to A
+    scattered by np.add.at from its pattern."""
+    m = _model(build, "numba")
     jac = m.constraint_jacobian_function()
     assert jac != m.constraint_jacobian                  # (the bound function, not the method)
     sp = m._pack().sp
     for _ in range(3):
         q = m.q0 + 0.1 * rng.normal(size=len(m.q0))
+        V = rng.normal(size=m.nv)
+        m.forces_and_constraints(q, V, 0.1)
         A = jac(q)
         assert np.array_equal(A, m.constraint_jacobian(q))
-        ref = np.zeros_like(A)
-        np.add.at(ref, (sp.rows, sp.acol), sp.aval)
-        assert np.array_equal(A, ref)
+        if sp is not None and sp.joints is not None:
+            ref = np.zeros_like(A)
+            np.add.at(ref, (sp.rows, sp.acol), sp.aval)
+            assert np.array_equal(A, ref)
 
 
 def test_without_constraints_the_residual_in_forces_takes_the_acceleration_forms_steps(monkeypatch):
