@@ -94,8 +94,9 @@ _KERNELS = []
 
 
 def _kernels():
-    """The fused update kernels (sparse LU, dense LU, CSR J⁻¹), imported on the first use (numba stays
-    unloaded on the numpy backend) and kept: an import statement costs ~0.7 µs a step."""
+    """The fused update kernels (sparse LU, dense LU, CSR J⁻¹), imported on the first use
+    (numba stays unloaded on the numpy backend) and kept: an import statement costs ~0.7 µs a
+    step."""
     from ..kernels.genalpha import ga_force_newton, ga_force_newton_csr, ga_force_newton_dense
     _KERNELS.extend((ga_force_newton, ga_force_newton_dense, ga_force_newton_csr))
     return _KERNELS
