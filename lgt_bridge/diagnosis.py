@@ -138,6 +138,12 @@ NOTE_RATIO = 2
 #: checks of the stability limit for that note at most (a hydraulic cylinder's Jacobian by
 #: differences showed a spurious 1e8 1/s at one state; Hairer's test held at later ones)
 NOTE_TRIES = 10
+#: a fixed-step run (genalpha, rkmk4, …) is looked at every SLOW_EVERY s of wall time
+#: (:func:`slow_tick`); once it has gone SLOW_AFTER s, a rest that needs more than SLOW_WALL s
+#: at the pace of the last SLOW_AFTER s is said once in a ModelNote, with where a step's time
+#: goes, and it goes on (a genalpha run of 512 contacting spheres took 188 s for what Exudyn's
+#: own solver does in 0.3 s, silently: ten Newton matrices a step)
+SLOW_AFTER, SLOW_WALL, SLOW_EVERY = 5.0, 60.0, 1.0
 
 
 def budget_tick(sim):
@@ -352,6 +358,62 @@ def stability_limit(sim, h):
     return (f"Its steps sit at its stability limit, h ≈ {h_stab:.3g} s ({mode}), whatever the tolerances: "
             "the model is stiff for an explicit method. Use method='radau5' or method='genalpha' (implicit: "
             "their steps follow the accuracy, not the stiffest mode).")
+
+
+def slow_tick(sim):
+    """After an accepted step of a fixed-step run: every SLOW_EVERY s of wall time a sample of
+    its progress, and from SLOW_AFTER s on the rest of the run at the pace of the last SLOW_AFTER
+    s (a contact closing makes the steps slower at once: the pace of the whole run so far would
+    hide it), said once when over :data:`SLOW_WALL`."""
+    now = _clock()
+    samples = getattr(sim, "_slow_samples", None)
+    if samples and now < samples[-1][0] + SLOW_EVERY:
+        return
+    if getattr(sim, "_slow_noted", False):
+        return
+    st = sim.stepper
+    here = (now, sim.n_steps, sim.t, (st.prob.n_f, st.n_newton, st.n_jacobians))
+    if not samples or now - samples[-1][0] > 10.0 * SLOW_AFTER or sim.t < samples[-1][2]:
+        sim._slow_samples = [here]          # (the first of a run, or a run of a kept simulation)
+        return
+    while len(samples) > 1 and now - samples[1][0] >= SLOW_AFTER:
+        del samples[0]
+    samples.append(here)
+    w0, n0, t0, counts = samples[0]
+    end = sim.t_end if sim.t_end is not None else getattr(sim, "run_end", None)
+    if now - w0 < SLOW_AFTER or end is None or not t0 < sim.t < end:
+        return
+    rest = (end - sim.t) * (now - w0) / (sim.t - t0)
+    if rest > SLOW_WALL:
+        sim._slow_noted = True
+        _note_slow(sim, end, rest, now - w0, sim.n_steps - n0, counts)
+
+
+def _note_slow(sim, end, rest, elapsed, steps, counts):
+    """The ModelNote of :func:`slow_tick`: how long the rest takes at the pace so far and where
+    a step's time goes (f evaluations; genalpha's Newton matrices and updates)."""
+    import warnings
+    from .errors import ModelNote
+    st = sim.stepper
+    f0, u0, j0 = counts
+    per = max(steps, 1)
+    parts = [f"{(st.prob.n_f - f0) / per:.3g} evaluations of the model a step"]
+    advice = ""
+    if st.n_newton > u0:
+        jac, upd = (st.n_jacobians - j0) / per, (st.n_newton - u0) / per
+        parts.append(f"{upd:.3g} Newton updates and {jac:.3g} Newton matrices a step")
+        if jac >= 1.0:
+            ref = getattr(sim, "reference_steps", None)
+            own = (ref[3].split(" (")[0] if ref is not None and len(ref) > 3 else "An engine's own solver")
+            advice = (f" Newton's iteration matrix is made anew {jac:.3g} times a step: the forces "
+                      "change faster than a kept matrix follows (contacts opening and closing, friction, "
+                      "springs turning within a step), and each matrix costs a Jacobian of the model. "
+                      f"{own} may keep its matrix across steps (modified Newton) and run such a model "
+                      "faster; method='dopri5' may too, if the model is not stiff.")
+    warnings.warn(ModelNote(
+        f"{sim.method} at t = {sim.t:.9g}: the rest of the run, to t = {end:.9g}, needs about "
+        f"{_duration(rest)} at the pace of the last {_duration(elapsed)} ({steps} steps, "
+        f"{elapsed / per:.3g} s a step: {'; '.join(parts)}). It goes on.{advice}"), stacklevel=2)
 
 
 def _duration(s):

@@ -279,6 +279,8 @@ class Simulation:
                 on_step(self.t, st.q, st.V)
             if st.adaptive and self.n_steps % self._budget_unit == 0:
                 _diagnosis.budget_tick(self)
+            elif not st.adaptive:
+                _diagnosis.slow_tick(self)
         else:
             self.h = h_new
             if self.h < 1e-14 * max(1.0, abs(self.t)):

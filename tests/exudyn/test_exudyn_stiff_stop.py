@@ -184,3 +184,23 @@ def test_an_accuracy_held_explicit_run_goes_on_and_says_how_long(monkeypatch):
         assert len(notes) == (1 if warned else 0), notes
         if warned:
             assert "times the" in notes[0] and "method='genalpha'" in notes[0]
+
+
+def test_a_slow_genalpha_run_says_where_its_steps_go_and_goes_on(monkeypatch):
+    """genalpha through the drop-in on the stiff swinging chain, whose Newton matrix is made
+    anew several times a step (its springs turn within a step), with the slow-run thresholds
+    scaled down so that this short run crosses them: one ModelNote with its Newton matrices a
+    step, naming Exudyn's own solver, and the run ends where it would have."""
+    from lgt_bridge import diagnosis
+    from lgt_bridge.errors import ModelNote
+    monkeypatch.setattr(diagnosis, "SLOW_AFTER", 0.005)
+    monkeypatch.setattr(diagnosis, "SLOW_EVERY", 0.001)
+    monkeypatch.setattr(diagnosis, "SLOW_WALL", 1e-6)
+    mbs, s = sm.stiff_spring_chain(damping=1e5)
+    with pytest.warns(ModelNote) as got:
+        SolveDynamic(mbs, s, method="genalpha")
+    slow = [str(w.message) for w in got if "the rest of the run" in str(w.message)]
+    assert len(slow) == 1, [str(w.message) for w in got]
+    jac = float(re.search(r"and ([0-9.]+) Newton matrices a step", slow[0]).group(1))
+    assert jac >= 1.0 and "Exudyn's own solver may keep its matrix across steps" in slow[0]
+    assert mbs.sys["lgtBridgeStats"]["success"] and mbs.systemData.GetTime() == pytest.approx(1.0)
