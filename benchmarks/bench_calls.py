@@ -296,7 +296,16 @@ def exudyn_sensor_top(tols, ga_steps):
         return mbs.GetSensorStoredData(s)
     ref = bridge(1e-13)[-1, 1:]
     rel = lambda d: float(np.abs(d[-1, 1:] - ref).max() / np.abs(ref).max())   # noqa: E731
-    bp = [(rel(d), w) for w, d in (best(lambda tol=tol: bridge(tol)) for tol in tols)]
+    # best of 5 per tolerance, taken in rounds over all tolerances (a slow spell of the host,
+    # which had left the loosest two points at ~0.1 s in some runs against ~0.06 s in others,
+    # then costs one sample of each point instead of all of one point's)
+    walls, data = {tol: np.inf for tol in tols}, {}
+    for _ in range(5):
+        for tol in tols:
+            t = time.perf_counter()
+            data[tol] = bridge(tol)
+            walls[tol] = min(walls[tol], time.perf_counter() - t)
+    bp = [(rel(data[tol]), walls[tol]) for tol in tols]
     npts = [(rel(d), w) for w, d in (best(lambda n=n: native(n), 1) for n in ga_steps)]
     # the drop-in's default caps its steps at endTime/numberOfSteps = 1 ms (Exudyn's maximum
     # step): every tolerance then runs 2000 steps, and the outputs are not what costs
