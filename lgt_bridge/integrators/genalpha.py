@@ -14,7 +14,11 @@ cay(ΔX/2), which agrees with exp(ΔX) to O(|ΔX|³) and keeps second order.
 Solved by modified Newton in (Ẇ_{k+1}, λ), the constraint rows scaled by 1/(h²β). The
 residual's rows are those of Ẇ (the linear rows of an SE(3) body in its body frame, like
 its unknowns u̇, so the iteration matrix does not turn with the bodies):
-    Ẇ - Ẇ(f(q, V, t))             unconstrained (the model's own f, its fastest path);
+    M̄ Ẇ - Q + Aᵀλ                 a constant mass matrix M̄ (``Model.constant_mass``) and
+                                   no SE(3) body, constrained or not (one product by M̄, the
+                                   fused Newton update of :mod:`.genalpha_newton`; without
+                                   constraints the same updates as in accelerations);
+    Ẇ - Ẇ(f(q, V, t))             otherwise unconstrained (the model's own f);
     Ẇ - Ẇ(M⁻¹(Q - Aᵀλ))           constrained, when the model solves with M itself
                                    (it overrides ``solve_mass``);
     P (M V̇ - Q + Aᵀλ)             constrained otherwise (P: the rotation to body frames).
