@@ -24,7 +24,8 @@ Jacobians.
   scipy.sparse matrices from them, or None when the model keeps the dense path;
 * :func:`residual_function` (model): ``forces_and_constraints`` with its lookups bound, for
   the Newton updates (``forces_and_constraints_function``); :func:`jacobian_function`
-  (model): A(q) of closed-form joint rows the same way (``constraint_jacobian_function``).
+  (model): A(q) the same way, at the state the update has just written
+  (``constraint_jacobian_function``).
 """
 import numpy as np
 

@@ -10,7 +10,7 @@ from numba import njit
 
 from . import guard_cache
 from .charts import increment, rot_rates, se3_rates
-from .linalg import lu_solve
+from .linalg import dense_lu_solve, lu_solve
 from .stage import NX_, OXD, convert, tau_state, views
 
 guard_cache(__file__, extra=(__file__.replace("genalpha.py", "stage.py"), __file__.replace("genalpha.py", "linalg.py")))
@@ -123,43 +123,30 @@ def ga_force_newton(mp, mi, mv, A, Q, g, cg, lp, li, lv, up, ui, uv, perm, z, r,
 def ga_force_newton_dense(mp, mi, mv, A, Q, g, cg, LU, piv, z, r, sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
     """:func:`ga_force_newton` with the dense LU factors of J (:func:`.linalg.dense_lu`: a
     Newton matrix of at most ``genalpha_matrix.DENSE_MAX`` unknowns, a small constrained model
-    such as a pendulum, whose updates were ~30 µs of Python around ~4 µs of Exudyn): the
-    solve is :func:`.linalg.dense_lu_solve`'s arithmetic for one right-hand side."""
+    such as a pendulum, whose updates were ~30 µs of Python around ~4 µs of Exudyn), solved
+    by :func:`.linalg.dense_lu_solve` with one right-hand side."""
     n, m = Q.shape[0], z.shape[0]
     if not math.isfinite(_force_residual(mp, mi, mv, A, Q, g, cg, z, r)):
         return -1.0
     dz = r.copy()
-    for k in range(m):
-        p = piv[k]
-        if p != k:
-            dz[k], dz[p] = dz[p], dz[k]
-    for i in range(m):
-        s = dz[i]
-        for j in range(i):
-            s -= LU[i, j] * dz[j]
-        dz[i] = s
-    for i in range(m - 1, -1, -1):
-        s = dz[i]
-        for j in range(i + 1, m):
-            s -= LU[i, j] * dz[j]
-        dz[i] = s / LU[i, i]
+    dense_lu_solve(LU, piv, dz.reshape((m, 1)))
     d2 = _step_by(z, dz, n)
     ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
     return d2
 
 
 @njit(cache=True, error_model="numpy")
-def ga_force_newton_csr(mp, mi, mv, A, Q, g, cg, sp, si, sv_, z, r, sv, sp_, Wa, dXa, tl, w, bt, vt, off, kin):
-    """:func:`ga_force_newton` with J⁻¹ itself as a CSR matrix (``sp, si, sv_``: J falls apart
+def ga_force_newton_csr(mp, mi, mv, A, Q, g, cg, jp, ji, jv, z, r, sv, sp, Wa, dXa, tl, w, bt, vt, off, kin):
+    """:func:`ga_force_newton` with J⁻¹ itself as a CSR matrix (``jp, ji, jv``: J falls apart
     into small blocks, inverted one by one: free bodies, ``genalpha_matrix._block_inverse``):
     the solve is a product (:func:`csr_matvec`'s arithmetic)."""
     n = Q.shape[0]
     if not math.isfinite(_force_residual(mp, mi, mv, A, Q, g, cg, z, r)):
         return -1.0
     dz = np.empty(z.shape[0])
-    csr_matvec(sp, si, sv_, r, dz)
+    csr_matvec(jp, ji, jv, r, dz)
     d2 = _step_by(z, dz, n)
-    ga_state(z[:n], sv, sp_, Wa, dXa, tl, w, bt, vt, off, kin)
+    ga_state(z[:n], sv, sp, Wa, dXa, tl, w, bt, vt, off, kin)
     return d2
 
 
